@@ -1,0 +1,35 @@
+// pmfrag: particle modeling of dynamic fracture and fragmentation. This file only wires subcommands.
+#include "cmd_material.hpp"
+#include "parse.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <exception>
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "pmfrag - particle modeling (Wang & Ostoja-Starzewski 2005, after Greenspan) of dynamic fracture and "
+      "fragmentation: material model, simulation, fragments, ParaView export and figures."};
+  app.require_subcommand(1);
+  pmfrag::app::add_material_command(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "pmfrag: error: %s (see --help)\n", e.what());
+    return 2;
+  } catch (const pmfrag::app::UsageError& e) {
+    std::fprintf(stderr, "pmfrag: error: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pmfrag: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
