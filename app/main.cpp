@@ -1,5 +1,6 @@
 // pmfrag: particle modeling of dynamic fracture and fragmentation. This file only wires subcommands.
 #include "cmd_material.hpp"
+#include "cmd_run.hpp"
 #include "parse.hpp"
 
 #include <CLI/CLI.hpp>
@@ -13,6 +14,7 @@ int main(int argc, char** argv) {
       "fragmentation: material model, simulation, fragments, ParaView export and figures."};
   app.require_subcommand(1);
   pmfrag::app::add_material_command(app);
+  pmfrag::app::add_run_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

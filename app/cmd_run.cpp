@@ -1,0 +1,87 @@
+#include "cmd_run.hpp"
+
+#include "parse.hpp"
+#include "pmfrag/run.hpp"
+
+#include <omp.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <memory>
+#include <stdexcept>
+
+namespace pmfrag::app {
+
+namespace {
+
+struct RunCli {
+  std::string scene, out;
+  std::vector<std::string> set;
+  bool allow_unstable = false, force = false, quiet = false;
+  int threads = 0;
+};
+
+std::string clock_text(double s) {
+  char b[32];
+  if (s < 60)
+    std::snprintf(b, sizeof b, "%.0fs", s);
+  else
+    std::snprintf(b, sizeof b, "%dm%02ds", static_cast<int>(s / 60), static_cast<int>(s) % 60);
+  return b;
+}
+
+void run(const RunCli& o) {
+  if (o.threads > 0) omp_set_num_threads(o.threads);
+  const Scene scene = read_scene(o.scene, o.set);
+  RunOptions ro;
+  ro.out_dir = o.out;
+  ro.allow_unstable = o.allow_unstable;
+  ro.force = o.force;
+  if (!o.quiet) ro.log = [](const std::string& line) { std::fprintf(stderr, "pmfrag: %s\n", line.c_str()); };
+  const bool tty = isatty(fileno(stderr));
+  double last_plain = -1e9;
+  if (!o.quiet)
+    ro.progress = [&, tty](const Progress& p) {
+      if (tty) {
+        const int width = 30;
+        const int filled = static_cast<int>(width * p.time / p.end);
+        std::string bar(static_cast<std::size_t>(filled), '#');
+        bar.resize(width, '.');
+        std::fprintf(stderr, "\r[%s] t = %.4e / %.4e s  %.3g steps/s  ETA %s   ", bar.c_str(), p.time, p.end,
+                     p.steps_per_s, clock_text(p.eta_s).c_str());
+      } else if (p.wall_s - last_plain >= 5.0) {
+        last_plain = p.wall_s;
+        std::fprintf(stderr, "pmfrag: t = %.4e / %.4e s (%.0f%%), %.3g steps/s, ETA %s\n", p.time, p.end,
+                     100.0 * p.time / p.end, p.steps_per_s, clock_text(p.eta_s).c_str());
+      }
+    };
+  const RunResult r = run_scene(scene, ro);
+  if (!o.quiet && tty) std::fprintf(stderr, "\n");
+  std::printf("%s: %ld steps, %ld frames, %zu particles in %.3g s (%.3g particle-steps/s, %d threads)\n",
+              r.completed ? "finished" : "STOPPED", r.steps, r.frames, r.particles, r.wall_s, r.particle_steps_per_s(),
+              omp_get_max_threads());
+  if (r.first_break_time >= 0)
+    std::printf("first broken bond at t = %.6e s\n", r.first_break_time);
+  else
+    std::printf("no bond broke\n");
+  std::printf("trajectory: %s/trajectory.h5\n", o.out.c_str());
+  if (!r.completed) throw std::runtime_error(r.message + " (frames written so far are kept)");
+}
+
+}  // namespace
+
+void add_run_command(CLI::App& app) {
+  auto o = std::make_shared<RunCli>();
+  auto* cmd = app.add_subcommand("run", "Simulate a scene (cases/*.toml) and write OUT/trajectory.h5 (H5MD)");
+  cmd->add_option("scene", o->scene, "Scene file (TOML)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--out,-o", o->out, "Output folder")->required();
+  cmd->add_option("--set", o->set, "Override a scene key, e.g. --set time.end=2e-3 (repeatable)")->type_name("KEY=VALUE");
+  cmd->add_flag("--allow-unstable", o->allow_unstable, "Run even if dt exceeds the Eq. 15 stability limit");
+  cmd->add_flag("--force", o->force, "Overwrite an existing trajectory in the output folder");
+  cmd->add_option("--threads", o->threads, "OpenMP threads (default: all cores; results are identical)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_flag("--quiet,-q", o->quiet, "No progress or log lines");
+  cmd->callback([o] { run(*o); });
+}
+
+}  // namespace pmfrag::app

@@ -1,0 +1,82 @@
+// Effects: the pieces of physics a scene attaches. Each declares the stages of a step it takes part in and
+// the integrator calls only those (cf. LAMMPS fixes' setmask); an effect the scene does not declare is never
+// built, so it costs nothing.
+#pragma once
+
+#include "pmfrag/system.hpp"
+
+#include <Eigen/Core>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace pmfrag {
+
+template <int D>
+struct State {
+  using V = Eigen::Matrix<double, D, 1>;
+  std::vector<V> x;  ///< positions r_k [cm]
+  std::vector<V> v;  ///< velocities: v_0 before the first step, then the half-step v_{k-1/2} [cm/s]
+  std::vector<V> f;  ///< forces at r_k [dyne]
+  std::vector<double> mass, inv_mass;  ///< g, 1/g
+  long step = 0;
+  double dt = 0.0;  ///< s
+  double r0 = 0.2;  ///< cm
+  double time() const { return static_cast<double>(step) * dt; }
+  std::size_t size() const { return x.size(); }
+};
+
+/// Tallied only on output steps (energies) or accumulated by the effects that own them.
+struct Observables {
+  double kinetic = 0.0;            ///< erg
+  double potential = 0.0;          ///< erg (pair law summed over interacting pairs and contacts)
+  double boundary_work = 0.0;      ///< erg done on the body by kinematic boundaries
+  double bond_break_energy = 0.0;  ///< erg: sum of phi(r) of bonds at the step they broke
+  long pairs_beyond_cutoff = 0;    ///< original bonds now longer than D (bonded: the broken ones)
+  /// Conserved without damping or gravity: kinetic + potential + bond_break_energy - boundary_work.
+  double balance() const { return kinetic + potential + bond_break_energy - boundary_work; }
+};
+
+namespace stage {
+inline constexpr unsigned setup = 1u << 0;        ///< once, before the first force evaluation
+inline constexpr unsigned force = 1u << 1;        ///< add forces at r_k (in attachment order; pair first)
+inline constexpr unsigned constrain = 1u << 2;    ///< after v_{k+1/2} is computed, before the move
+inline constexpr unsigned after_move = 1u << 3;   ///< after r_{k+1} is known (neighbour lists)
+inline constexpr unsigned frame = 1u << 4;        ///< adjust the whole-step velocity written to a frame
+inline constexpr unsigned observe = 1u << 5;      ///< contribute to Observables on output steps
+}  // namespace stage
+
+template <int D>
+class Effect {
+ public:
+  using V = Eigen::Matrix<double, D, 1>;
+  virtual ~Effect() = default;
+  virtual std::string name() const = 0;
+  virtual unsigned stages() const = 0;
+  virtual void setup(State<D>&) {}
+  virtual void add_forces(State<D>&) {}
+  virtual void constrain(State<D>&) {}
+  virtual void after_move(State<D>&, double /*max_displacement*/) {}
+  virtual void frame_velocity(std::vector<V>&) const {}
+  virtual void observe(const State<D>&, Observables&) const {}
+  /// Make the next force evaluation independent of history (e.g. rebuild neighbour lists now), so a run
+  /// resumed from this step is bitwise identical to one that never stopped.
+  virtual void canonicalize(const State<D>&) {}
+};
+
+/// The effects a scene declares, in the order the integrator calls them: pair, greenspan_alpha, gravity,
+/// damping, kinematic. (The impactor sets initial velocities when the System is built.)
+template <int D>
+std::vector<std::unique_ptr<Effect<D>>> make_effects(const System& sys, const Scene& scene);
+
+/// Internals exposed for tests: bond state of the pair effect, if any.
+template <int D>
+struct BondView {
+  const std::vector<std::uint8_t>* alive = nullptr;
+  long first_break_step = -1;
+};
+template <int D>
+BondView<D> bond_view(const Effect<D>& e);
+
+}  // namespace pmfrag

@@ -1,0 +1,50 @@
+// Leapfrog integration exactly as Eqs. (12)-(14), with a stability guard: a non-finite value or a particle
+// moving more than r0/2 in one step stops the run with an error naming particle, step and time.
+#pragma once
+
+#include "pmfrag/effects.hpp"
+
+#include <stdexcept>
+
+namespace pmfrag {
+
+struct GuardError : std::runtime_error {
+  GuardError(const std::string& what, long step_, double time_, long particle_)
+      : std::runtime_error(what), step(step_), time(time_), particle(particle_) {}
+  long step;
+  double time;
+  long particle;
+};
+
+template <int D>
+class Leapfrog {
+ public:
+  using V = Eigen::Matrix<double, D, 1>;
+
+  /// Takes the System's particles at t = 0, runs the effects' setup, and evaluates forces at r_0.
+  Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>> effects, double dt);
+
+  /// One step k -> k+1: Eq. (12) at k = 0 (starter half step), Eq. (13) after; constraints; Eq. (14); then
+  /// forces at r_{k+1}, so forces are always those of the current positions between steps.
+  void step();
+
+  /// Whole-step velocities v_k = v_{k-1/2} + (dt/2) a_k (v_0 at k = 0), as written to frames.
+  void whole_step_velocity(std::vector<V>& out) const;
+  /// Energies and tallies at the current step (serial sums: the same for any thread count).
+  Observables observe() const;
+
+  /// Make the next step independent of list history (see Effect::canonicalize); used at checkpoints.
+  void canonicalize();
+
+  State<D>& state() { return s_; }
+  const State<D>& state() const { return s_; }
+  const std::vector<std::unique_ptr<Effect<D>>>& effects() const { return effects_; }
+
+ private:
+  void compute_forces();
+  State<D> s_;
+  std::vector<std::unique_ptr<Effect<D>>> effects_;
+  std::vector<Effect<D>*> force_, constrain_, after_move_, frame_, observe_;
+};
+
+}  // namespace pmfrag

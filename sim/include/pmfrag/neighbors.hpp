@@ -1,0 +1,89 @@
+// Cell list for finding pairs closer than a cutoff, in O(N log N) for any spread of particles: cells are
+// keyed by their integer coordinates and sorted, so pieces that fly far apart cost no empty cells.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+namespace pmfrag {
+
+template <int D>
+class CellList {
+ public:
+  using V = Eigen::Matrix<double, D, 1>;
+
+  /// Calls f(i, j, r2) once for every pair i < j with |x_i - x_j|^2 < cutoff^2, in a fixed order that
+  /// depends only on the positions (so lists built from equal positions are equal).
+  template <class F>
+  void for_each_pair(const std::vector<V>& x, double cutoff, F&& f) {
+    const std::size_t n = x.size();
+    if (n < 2) return;
+    V lo = x[0];
+    for (const auto& p : x) lo = lo.cwiseMin(p);
+    const double inv_cell = 1.0 / cutoff;
+    entries_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      std::array<std::int64_t, 3> c{0, 0, 0};
+      for (int d = 0; d < D; ++d) c[d] = clamp_cell(std::floor((x[i][d] - lo[d]) * inv_cell));
+      entries_[i] = {pack(c), static_cast<std::uint32_t>(i)};
+    }
+    std::sort(entries_.begin(), entries_.end());
+    const double cut2 = cutoff * cutoff;
+    std::size_t begin = 0;
+    while (begin < n) {
+      std::size_t end = begin;
+      const std::uint64_t key = entries_[begin].key;
+      while (end < n && entries_[end].key == key) ++end;
+      const auto c = unpack(key);
+      // Neighbour cells with key >= this one cover each pair of cells once (same cell: i < j).
+      for (int dz = (D == 3 ? -1 : 0); dz <= (D == 3 ? 1 : 0); ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            std::array<std::int64_t, 3> nc{c[0] + dx, c[1] + dy, c[2] + dz};
+            if (nc[0] < 0 || nc[1] < 0 || nc[2] < 0 || nc[0] > max_cell || nc[1] > max_cell || nc[2] > max_cell) continue;
+            const std::uint64_t nkey = pack(nc);
+            if (nkey < key) continue;
+            auto range = std::equal_range(entries_.begin(), entries_.end(), Entry{nkey, 0},
+                                          [](const Entry& a, const Entry& b) { return a.key < b.key; });
+            for (std::size_t a = begin; a < end; ++a) {
+              const std::uint32_t i = entries_[a].index;
+              for (auto it = range.first; it != range.second; ++it) {
+                const std::uint32_t j = it->index;
+                if (nkey == key && j <= i) continue;
+                const double r2 = (x[i] - x[j]).squaredNorm();
+                if (r2 < cut2) f(std::min(i, j), std::max(i, j), r2);
+              }
+            }
+          }
+      begin = end;
+    }
+  }
+
+ private:
+  static constexpr std::int64_t max_cell = (1 << 21) - 1;
+  struct Entry {
+    std::uint64_t key;
+    std::uint32_t index;
+    bool operator<(const Entry& o) const { return key < o.key || (key == o.key && index < o.index); }
+  };
+  static std::int64_t clamp_cell(double c) {
+    // Particles absurdly far away share edge cells: still correct (distances are checked), just slower.
+    if (!(c >= 0.0)) return 0;
+    return c > static_cast<double>(max_cell) ? max_cell : static_cast<std::int64_t>(c);
+  }
+  static std::uint64_t pack(const std::array<std::int64_t, 3>& c) {
+    return (static_cast<std::uint64_t>(c[2]) << 42) | (static_cast<std::uint64_t>(c[1]) << 21) |
+           static_cast<std::uint64_t>(c[0]);
+  }
+  static std::array<std::int64_t, 3> unpack(std::uint64_t k) {
+    return {static_cast<std::int64_t>(k & max_cell), static_cast<std::int64_t>((k >> 21) & max_cell),
+            static_cast<std::int64_t>(k >> 42)};
+  }
+  std::vector<Entry> entries_;
+};
+
+}  // namespace pmfrag

@@ -1,0 +1,43 @@
+// Running a scene end to end: build the System and its effects, choose and check the step (Eq. 15), advance
+// with leapfrog and write the H5MD trajectory.
+#pragma once
+
+#include "pmfrag/scene.hpp"
+
+#include <functional>
+#include <string>
+
+namespace pmfrag {
+
+struct Progress {
+  double time = 0.0, end = 0.0;  ///< simulated s
+  long step = 0, steps = 0;
+  double steps_per_s = 0.0, eta_s = 0.0, wall_s = 0.0;
+};
+
+struct RunOptions {
+  std::string out_dir;
+  bool allow_unstable = false;  ///< run even if dt exceeds the Eq. 15 limit
+  bool force = false;           ///< overwrite an existing trajectory
+  std::function<void(const std::string&)> log;         ///< one line of information
+  std::function<void(const Progress&)> progress;       ///< called every ~0.2 s of wall time
+};
+
+struct RunResult {
+  long steps = 0, frames = 0;
+  std::size_t particles = 0;
+  double dt = 0.0, dt_limit = 0.0, wall_s = 0.0;
+  double first_break_time = -1.0;  ///< s; -1 if no bond broke
+  bool completed = false;          ///< false: stopped by the guard (message says why)
+  std::string message;
+  double particle_steps_per_s() const { return wall_s > 0 ? static_cast<double>(particles) * steps / wall_s : 0.0; }
+};
+
+/// Thrown when dt exceeds the Eq. 15 limit and allow_unstable is not set.
+struct UnstableStepError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+RunResult run_scene(const Scene& scene, const RunOptions& options);
+
+}  // namespace pmfrag

@@ -1,0 +1,120 @@
+// A scene: what to simulate, as declared in a TOML file (cases/*.toml). Reading validates everything and
+// reports each problem as FILE:LINE: key 'a.b': what is wrong. Only the effects a scene declares exist in it.
+#pragma once
+
+#include "pmfrag/geometry.hpp"
+#include "pmfrag/lattice.hpp"
+#include "pmfrag/material.hpp"
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace pmfrag {
+
+struct SceneError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+enum class LatticeKind { greenspan_plate, triangular, hcp, fcc };
+
+struct BodySpec {
+  std::string name;
+  LatticeKind lattice = LatticeKind::triangular;
+  double r0 = 0.2;                   ///< cm
+  Region shape;                      ///< sites kept (kind all = every generated site)
+  std::optional<Vec3> origin;        ///< first site; default: the shape's lower corner
+  std::optional<std::array<int, 3>> sites;  ///< sites per direction; default: enough to cover the shape
+  std::vector<Region> holes;         ///< sites inside are removed
+  std::vector<int> void_sites;       ///< sites removed by their number in the lattice's storage order
+  std::vector<Segment> slits;        ///< bonds crossing are removed
+  std::string phase;                 ///< phase of its particles (a phase's region may override)
+};
+
+struct PhaseSpec {
+  std::string name;
+  // Either derived by the material model (Sec. 5.1) for (p, q), r0 and a block, or given directly.
+  bool derived = true;
+  int p = 7, q = 14;
+  Block block;
+  double G = 0.0, H = 0.0, mass = 0.0;  ///< when not derived (dyne cm^p, dyne cm^q, g)
+  std::optional<Region> region;          ///< particles inside take this phase (inclusions)
+};
+
+struct InterfaceSpec {
+  std::string a, b;
+  // The law across the interface: the weaker phase law times `scale`, or given by p, q, G, H.
+  double scale = 1.0;
+  bool explicit_law = false;
+  PairLaw law;
+};
+
+enum class PairModel { bonded, cutoff };
+
+struct PairSpec {
+  PairModel model = PairModel::bonded;
+  double cutoff_r0 = 1.7;  ///< D / r0
+  double r_min_r0 = 0.0;   ///< force held constant inside r_min (0 = no clamp)
+  bool contact = true;     ///< bonded: unbonded particles closer than r0 repel
+};
+
+struct Selection {
+  enum class Kind { all, top_row, bottom_row, region, phase, body };
+  Kind kind = Kind::all;
+  Region region;
+  std::string name;  ///< phase or body
+  std::string describe() const;
+};
+
+struct KinematicSpec {
+  Selection select;
+  Vec3 velocity = Vec3::Zero();  ///< cm/s
+};
+
+struct ImpactorSpec {
+  std::string body;
+  Vec3 velocity = Vec3::Zero();  ///< cm/s
+};
+
+struct DampingSpec {
+  double gamma = 0.0;  ///< 1/s: force -gamma m v
+};
+
+struct TimeSpec {
+  bool auto_dt = false;
+  double dt = 1e-7;      ///< s (when not auto)
+  double safety = 0.5;   ///< auto: dt = safety x the Eq. 15 limit
+  double end = 0.0;      ///< s
+};
+
+struct OutputSpec {
+  double every = 1e-4;            ///< s between frames
+  double checkpoint_every = 0.0;  ///< s between checkpoints (0: every 10 frames)
+};
+
+struct Scene {
+  std::string file;  ///< where it was read from (for messages)
+  std::string text;  ///< the scene text as read, with --set overrides applied
+  std::string title;
+  int dim = 2;
+  std::vector<BodySpec> bodies;
+  std::vector<PhaseSpec> phases;
+  std::vector<InterfaceSpec> interfaces;
+  std::optional<PairSpec> pair;
+  std::vector<KinematicSpec> kinematic;
+  std::vector<ImpactorSpec> impactors;
+  std::optional<Vec3> gravity;  ///< cm/s^2
+  std::optional<DampingSpec> damping;
+  bool greenspan_alpha = false;  ///< Eq. (10) scaling of the pair force (pseudo-dynamic; off unless declared)
+  TimeSpec time;
+  OutputSpec output;
+};
+
+/// Reads and validates a scene. `overrides` are "dotted.key=value" strings (value in TOML syntax; bare words
+/// are taken as strings); they replace or add keys before validation.
+Scene read_scene(const std::string& path, const std::vector<std::string>& overrides = {});
+/// Same, from text (file is only used in messages).
+Scene parse_scene(const std::string& text, const std::string& file, const std::vector<std::string>& overrides = {});
+
+}  // namespace pmfrag

@@ -1,0 +1,138 @@
+// The effects besides the pair law. Each is attached only when the scene declares it.
+#include "pmfrag/effects.hpp"
+
+#include <cmath>
+
+namespace pmfrag {
+
+template <int D>
+std::unique_ptr<Effect<D>> make_pair_effect(const System& sys, const PairSpec& spec);
+
+namespace {
+
+template <int D>
+Eigen::Matrix<double, D, 1> head(const Vec3& v) {
+  return v.head<D>();
+}
+
+/// Kinematic boundary (Sec. 4.2): selected particles move at a prescribed velocity whatever the forces.
+/// Tallies the work the boundary does: the constraint force is -f_i, so dW = -f_i . u dt each step.
+template <int D>
+class Kinematic final : public Effect<D> {
+ public:
+  using V = Eigen::Matrix<double, D, 1>;
+  Kinematic(const System& sys, const KinematicSpec& spec, std::size_t index)
+      : u_(head<D>(spec.velocity)),
+        index_(select_particles(sys, spec.select, "kinematic[" + std::to_string(index) + "].select")) {}
+  std::string name() const override { return "kinematic"; }
+  unsigned stages() const override { return stage::setup | stage::constrain | stage::frame | stage::observe; }
+  void setup(State<D>& s) override {
+    for (int i : index_) s.v[static_cast<std::size_t>(i)] = u_;
+  }
+  void constrain(State<D>& s) override {
+    double w = 0.0;
+    for (int i : index_) {
+      w -= s.f[static_cast<std::size_t>(i)].dot(u_);
+      s.v[static_cast<std::size_t>(i)] = u_;
+    }
+    work_ += w * s.dt;
+  }
+  void frame_velocity(std::vector<V>& v) const override {
+    for (int i : index_) v[static_cast<std::size_t>(i)] = u_;
+  }
+  void observe(const State<D>&, Observables& o) const override { o.boundary_work += work_; }
+  double work() const { return work_; }
+  void set_work(double w) { work_ = w; }
+
+ private:
+  V u_;
+  std::vector<int> index_;
+  double work_ = 0.0;
+};
+
+template <int D>
+class Gravity final : public Effect<D> {
+ public:
+  using V = Eigen::Matrix<double, D, 1>;
+  explicit Gravity(const Vec3& g) : g_(head<D>(g)) {}
+  std::string name() const override { return "gravity"; }
+  unsigned stages() const override { return stage::force | stage::observe; }
+  void add_forces(State<D>& s) override {
+    const long n = static_cast<long>(s.size());
+#pragma omp parallel for schedule(static)
+    for (long k = 0; k < n; ++k) s.f[static_cast<std::size_t>(k)] += s.mass[static_cast<std::size_t>(k)] * g_;
+  }
+  void observe(const State<D>& s, Observables& o) const override {
+    double pe = 0.0;  // -m g . x
+    for (std::size_t k = 0; k < s.size(); ++k) pe -= s.mass[k] * g_.dot(s.x[k]);
+    o.potential += pe;
+  }
+
+ private:
+  V g_;
+};
+
+/// Viscous damping -gamma m v, with v the latest half-step velocity.
+template <int D>
+class Damping final : public Effect<D> {
+ public:
+  explicit Damping(double gamma) : gamma_(gamma) {}
+  std::string name() const override { return "damping"; }
+  unsigned stages() const override { return stage::force; }
+  void add_forces(State<D>& s) override {
+    const long n = static_cast<long>(s.size());
+#pragma omp parallel for schedule(static)
+    for (long k = 0; k < n; ++k)
+      s.f[static_cast<std::size_t>(k)] -= gamma_ * s.mass[static_cast<std::size_t>(k)] * s.v[static_cast<std::size_t>(k)];
+  }
+
+ private:
+  double gamma_;
+};
+
+/// Greenspan's Eq. (10): the interaction is scaled by a = 0.001 x 980 m / |F(D)| per particle, making it
+/// "small relative to gravity". The paper sets a = 1 and shows this gives a pseudo-dynamic solution; it is
+/// here to show that difference. Must follow the pair effect and precede other forces.
+template <int D>
+class GreenspanAlpha final : public Effect<D> {
+ public:
+  explicit GreenspanAlpha(const System& sys) {
+    for (std::size_t i = 0; i < sys.size(); ++i) {
+      const int ph = sys.phase[i];
+      const PairLaw& law = sys.law(ph, ph);
+      alpha_.push_back(0.98 * sys.phase_mass[static_cast<std::size_t>(ph)] / std::fabs(law.force(sys.cutoff)));
+    }
+  }
+  std::string name() const override { return "greenspan_alpha"; }
+  unsigned stages() const override { return stage::force; }
+  void add_forces(State<D>& s) override {
+    const long n = static_cast<long>(s.size());
+#pragma omp parallel for schedule(static)
+    for (long k = 0; k < n; ++k) s.f[static_cast<std::size_t>(k)] *= alpha_[static_cast<std::size_t>(k)];
+  }
+
+ private:
+  std::vector<double> alpha_;
+};
+
+}  // namespace
+
+template <int D>
+std::vector<std::unique_ptr<Effect<D>>> make_effects(const System& sys, const Scene& scene) {
+  std::vector<std::unique_ptr<Effect<D>>> out;
+  if (scene.pair) out.push_back(make_pair_effect<D>(sys, *scene.pair));
+  if (scene.greenspan_alpha) {
+    if (!scene.pair) throw SceneError(scene.file + ": greenspan_alpha scales the pair force, but no [pair] is declared");
+    out.push_back(std::make_unique<GreenspanAlpha<D>>(sys));
+  }
+  if (scene.gravity) out.push_back(std::make_unique<Gravity<D>>(*scene.gravity));
+  if (scene.damping) out.push_back(std::make_unique<Damping<D>>(scene.damping->gamma));
+  for (std::size_t k = 0; k < scene.kinematic.size(); ++k)
+    out.push_back(std::make_unique<Kinematic<D>>(sys, scene.kinematic[k], k));
+  return out;
+}
+
+template std::vector<std::unique_ptr<Effect<2>>> make_effects<2>(const System&, const Scene&);
+template std::vector<std::unique_ptr<Effect<3>>> make_effects<3>(const System&, const Scene&);
+
+}  // namespace pmfrag

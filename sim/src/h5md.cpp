@@ -1,0 +1,351 @@
+#include "pmfrag/h5md.hpp"
+
+#include <hdf5.h>
+
+#include <stdexcept>
+
+namespace pmfrag {
+
+namespace {
+
+void check(herr_t status, const char* what) {
+  if (status < 0) throw std::runtime_error(std::string("HDF5: ") + what + " failed");
+}
+hid_t checked(hid_t id, const char* what) {
+  if (id < 0) throw std::runtime_error(std::string("HDF5: ") + what + " failed");
+  return id;
+}
+
+hid_t make_group(hid_t parent, const char* name) { return checked(H5Gcreate2(parent, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name); }
+
+void string_attribute(hid_t obj, const char* name, const std::string& value) {
+  hid_t type = H5Tcopy(H5T_C_S1);
+  H5Tset_size(type, value.empty() ? 1 : value.size());
+  hid_t space = H5Screate(H5S_SCALAR);
+  hid_t a = checked(H5Acreate2(obj, name, type, space, H5P_DEFAULT, H5P_DEFAULT), name);
+  check(H5Awrite(a, type, value.c_str()), name);
+  H5Aclose(a), H5Sclose(space), H5Tclose(type);
+}
+
+void int_array_attribute(hid_t obj, const char* name, const std::vector<int>& v) {
+  hsize_t dims[1] = {v.size()};
+  hid_t space = H5Screate_simple(1, dims, nullptr);
+  hid_t a = checked(H5Acreate2(obj, name, H5T_NATIVE_INT, space, H5P_DEFAULT, H5P_DEFAULT), name);
+  check(H5Awrite(a, H5T_NATIVE_INT, v.data()), name);
+  H5Aclose(a), H5Sclose(space);
+}
+
+void string_dataset(hid_t parent, const char* name, const std::string& value) {
+  hid_t type = H5Tcopy(H5T_C_S1);
+  H5Tset_size(type, value.empty() ? 1 : value.size());
+  hid_t space = H5Screate(H5S_SCALAR);
+  hid_t d = checked(H5Dcreate2(parent, name, type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name);
+  check(H5Dwrite(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, value.c_str()), name);
+  H5Dclose(d), H5Sclose(space), H5Tclose(type);
+}
+
+template <class T>
+hid_t native();
+template <>
+hid_t native<double>() { return H5T_NATIVE_DOUBLE; }
+template <>
+hid_t native<int>() { return H5T_NATIVE_INT; }
+template <>
+hid_t native<long>() { return H5T_NATIVE_LONG; }
+
+template <class T>
+void array_dataset(hid_t parent, const char* name, const std::vector<T>& v, std::vector<hsize_t> dims) {
+  hid_t space = H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr);
+  hid_t d = checked(H5Dcreate2(parent, name, native<T>(), space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name);
+  if (!v.empty()) check(H5Dwrite(d, native<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), name);
+  H5Dclose(d), H5Sclose(space);
+}
+
+void scalar_dataset(hid_t parent, const char* name, double value) { array_dataset<double>(parent, name, {value}, {}); }
+
+// An H5MD time-dependent element: step, time, value, each growing along the first axis.
+struct Series {
+  hid_t group = -1, step = -1, time = -1, value = -1, type = -1;
+  std::vector<hsize_t> shape;  // per-frame shape of value
+
+  Series() = default;
+  Series(hid_t parent, const char* name, std::vector<hsize_t> frame_shape, hid_t value_type)
+      : type(value_type), shape(std::move(frame_shape)) {
+    group = make_group(parent, name);
+    step = grow(group, "step", H5T_NATIVE_LONG, {});
+    time = grow(group, "time", H5T_NATIVE_DOUBLE, {});
+    value = grow(group, "value", type, shape);
+    string_attribute(time, "unit", "s");
+  }
+  static hid_t grow(hid_t g, const char* name, hid_t t, const std::vector<hsize_t>& frame) {
+    std::vector<hsize_t> dims{0}, maxd{H5S_UNLIMITED}, chunk{frame.empty() ? hsize_t(256) : hsize_t(1)};
+    for (auto s : frame) dims.push_back(s), maxd.push_back(s), chunk.push_back(s);
+    hid_t space = H5Screate_simple(static_cast<int>(dims.size()), dims.data(), maxd.data());
+    hid_t plist = H5Pcreate(H5P_DATASET_CREATE);
+    H5Pset_chunk(plist, static_cast<int>(chunk.size()), chunk.data());
+    hid_t d = checked(H5Dcreate2(g, name, t, space, H5P_DEFAULT, plist, H5P_DEFAULT), name);
+    H5Pclose(plist), H5Sclose(space);
+    return d;
+  }
+  static void append(hid_t d, hsize_t index, const std::vector<hsize_t>& frame, hid_t t, const void* data) {
+    std::vector<hsize_t> dims{index + 1}, start{index}, count{1};
+    for (auto s : frame) dims.push_back(s), start.push_back(0), count.push_back(s);
+    check(H5Dset_extent(d, dims.data()), "extend");
+    hid_t fspace = H5Dget_space(d);
+    H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr);
+    hid_t mspace = H5Screate_simple(static_cast<int>(count.size()), count.data(), nullptr);
+    check(H5Dwrite(d, t, mspace, fspace, H5P_DEFAULT, data), "write frame");
+    H5Sclose(mspace), H5Sclose(fspace);
+  }
+  void append(hsize_t index, long s, double t, const void* data) {
+    append(step, index, {}, H5T_NATIVE_LONG, &s);
+    append(time, index, {}, H5T_NATIVE_DOUBLE, &t);
+    append(value, index, shape, type, data);
+  }
+  void close() {
+    if (group < 0) return;
+    H5Dclose(step), H5Dclose(time), H5Dclose(value), H5Gclose(group);
+    group = -1;
+  }
+};
+
+void write_law(hid_t g, const PairLaw& law, double mass) {
+  scalar_dataset(g, "p", law.p);
+  scalar_dataset(g, "q", law.q);
+  scalar_dataset(g, "G", law.G);
+  scalar_dataset(g, "H", law.H);
+  scalar_dataset(g, "mass", mass);
+}
+
+}  // namespace
+
+struct H5mdWriter::Impl {
+  hid_t file = -1;
+  hid_t particles = -1;
+  Series position, velocity;
+  std::map<std::string, Series> observables;
+  hid_t obs_group = -1;
+};
+
+H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& scene, const RunParameters& run)
+    : impl_(std::make_unique<Impl>()) {
+  auto& m = *impl_;
+  m.file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  if (m.file < 0) throw std::runtime_error(path + ": cannot create trajectory file");
+  const hsize_t n = sys.size(), dim = static_cast<hsize_t>(sys.dim);
+
+  hid_t h5md = make_group(m.file, "h5md");
+  int_array_attribute(h5md, "version", {1, 1});
+  hid_t author = make_group(h5md, "author");
+  string_attribute(author, "name", "pmfrag user");
+  hid_t creator = make_group(h5md, "creator");
+  string_attribute(creator, "name", "pmfrag");
+  string_attribute(creator, "version", "0.1.0");
+  H5Gclose(author), H5Gclose(creator), H5Gclose(h5md);
+
+  hid_t parts = make_group(m.file, "particles");
+  m.particles = make_group(parts, "all");
+  H5Gclose(parts);
+  hid_t box = make_group(m.particles, "box");
+  int_array_attribute(box, "dimension", {sys.dim});
+  {
+    // boundary: "none" per dimension (the body is free in space)
+    hid_t type = H5Tcopy(H5T_C_S1);
+    H5Tset_size(type, 4);
+    hsize_t d[1] = {dim};
+    hid_t space = H5Screate_simple(1, d, nullptr);
+    hid_t a = H5Acreate2(box, "boundary", type, space, H5P_DEFAULT, H5P_DEFAULT);
+    std::string none(4 * dim, '\0');
+    for (hsize_t k = 0; k < dim; ++k) none.replace(4 * k, 4, "none");
+    check(H5Awrite(a, type, none.data()), "boundary");
+    H5Aclose(a), H5Sclose(space), H5Tclose(type);
+  }
+  H5Gclose(box);
+  m.position = Series(m.particles, "position", {n, dim}, H5T_NATIVE_DOUBLE);
+  string_attribute(m.position.value, "unit", "cm");
+  m.velocity = Series(m.particles, "velocity", {n, dim}, H5T_NATIVE_DOUBLE);
+  string_attribute(m.velocity.value, "unit", "cm s-1");
+  std::vector<int> ids(n);
+  std::vector<double> mass(n);
+  for (std::size_t i = 0; i < n; ++i) ids[i] = static_cast<int>(i), mass[i] = sys.phase_mass[static_cast<std::size_t>(sys.phase[i])];
+  array_dataset(m.particles, "species", sys.phase, {n});
+  array_dataset(m.particles, "id", ids, {n});
+  array_dataset(m.particles, "mass", mass, {n});
+  array_dataset(m.particles, "body", sys.body, {n});
+  array_dataset(m.particles, "site", sys.site, {n});
+
+  hid_t conn = make_group(m.file, "connectivity");
+  std::vector<int> flat;
+  for (const auto& b : sys.bonds) flat.push_back(b[0]), flat.push_back(b[1]);
+  array_dataset(conn, "bonds", flat, {sys.bonds.size(), 2});
+  {
+    hid_t d = H5Dopen2(conn, "bonds", H5P_DEFAULT);
+    string_attribute(d, "particles_group", "/particles/all");
+    H5Dclose(d);
+  }
+  H5Gclose(conn);
+
+  m.obs_group = make_group(m.file, "observables");
+  for (const char* name : {"kinetic_energy", "potential_energy", "total_energy", "boundary_work", "bond_break_energy",
+                           "energy_balance"}) {
+    m.observables.emplace(name, Series(m.obs_group, name, {}, H5T_NATIVE_DOUBLE));
+    string_attribute(m.observables[name].value, "unit", "erg");
+  }
+  m.observables.emplace("pairs_beyond_cutoff", Series(m.obs_group, "pairs_beyond_cutoff", {}, H5T_NATIVE_DOUBLE));
+
+  hid_t par = make_group(m.file, "parameters");
+  string_dataset(par, "scene", scene.text);
+  string_dataset(par, "scene_file", scene.file);
+  scalar_dataset(par, "dt", run.dt);
+  scalar_dataset(par, "dt_limit", run.dt_limit);
+  scalar_dataset(par, "end", run.end);
+  scalar_dataset(par, "frame_every_steps", static_cast<double>(run.frame_every));
+  scalar_dataset(par, "r0", sys.r0);
+  scalar_dataset(par, "cutoff", sys.cutoff);
+  scalar_dataset(par, "r_min", sys.r_min);
+  scalar_dataset(par, "dimension", sys.dim);
+  string_dataset(par, "pair_model", scene.pair ? (scene.pair->model == PairModel::bonded ? "bonded" : "cutoff") : "none");
+  if (sys.phase_names.size() == 1) {
+    write_law(par, sys.laws.front(), sys.phase_mass.front());
+  } else {
+    hid_t phases = make_group(par, "phases");
+    for (std::size_t k = 0; k < sys.phase_names.size(); ++k) {
+      hid_t g = make_group(phases, sys.phase_names[k].c_str());
+      write_law(g, sys.law(static_cast<int>(k), static_cast<int>(k)), sys.phase_mass[k]);
+      H5Gclose(g);
+    }
+    H5Gclose(phases);
+  }
+  H5Gclose(par);
+  H5Fflush(m.file, H5F_SCOPE_GLOBAL);
+}
+
+H5mdWriter::~H5mdWriter() {
+  try {
+    close();
+  } catch (...) {
+  }
+}
+
+void H5mdWriter::write_frame(long step, double time, const std::vector<double>& position,
+                             const std::vector<double>& velocity, const Observables& obs) {
+  auto& m = *impl_;
+  const hsize_t k = static_cast<hsize_t>(frames_);
+  m.position.append(k, step, time, position.data());
+  m.velocity.append(k, step, time, velocity.data());
+  const double total = obs.kinetic + obs.potential;
+  const double beyond = static_cast<double>(obs.pairs_beyond_cutoff);
+  const double balance = obs.balance();
+  m.observables["kinetic_energy"].append(k, step, time, &obs.kinetic);
+  m.observables["potential_energy"].append(k, step, time, &obs.potential);
+  m.observables["total_energy"].append(k, step, time, &total);
+  m.observables["boundary_work"].append(k, step, time, &obs.boundary_work);
+  m.observables["bond_break_energy"].append(k, step, time, &obs.bond_break_energy);
+  m.observables["energy_balance"].append(k, step, time, &balance);
+  m.observables["pairs_beyond_cutoff"].append(k, step, time, &beyond);
+  ++frames_;
+  check(H5Fflush(m.file, H5F_SCOPE_GLOBAL), "flush");
+}
+
+void H5mdWriter::close() {
+  if (!impl_ || impl_->file < 0) return;
+  auto& m = *impl_;
+  m.position.close();
+  m.velocity.close();
+  for (auto& [name, s] : m.observables) s.close();
+  H5Gclose(m.obs_group);
+  H5Gclose(m.particles);
+  H5Fclose(m.file);
+  m.file = -1;
+}
+
+// ---- reader ----
+
+namespace {
+std::vector<hsize_t> dims_of(hid_t d) {
+  hid_t space = H5Dget_space(d);
+  const int rank = H5Sget_simple_extent_ndims(space);
+  std::vector<hsize_t> dims(static_cast<std::size_t>(rank));
+  H5Sget_simple_extent_dims(space, dims.data(), nullptr);
+  H5Sclose(space);
+  return dims;
+}
+template <class T>
+std::vector<T> read_all(hid_t file, const std::string& path) {
+  hid_t d = H5Dopen2(file, path.c_str(), H5P_DEFAULT);
+  if (d < 0) throw std::runtime_error("trajectory has no " + path);
+  hsize_t count = 1;
+  for (auto s : dims_of(d)) count *= s;
+  std::vector<T> v(count);
+  if (count) check(H5Dread(d, native<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), path.c_str());
+  H5Dclose(d);
+  return v;
+}
+}  // namespace
+
+H5mdReader::H5mdReader(const std::string& path) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // we report missing objects ourselves
+  file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (file_ < 0) throw std::runtime_error(path + ": cannot open as HDF5");
+  hid_t d = H5Dopen2(file_, "/particles/all/position/value", H5P_DEFAULT);
+  if (d < 0) throw std::runtime_error(path + ": not an H5MD trajectory (no /particles/all/position)");
+  const auto dims = dims_of(d);
+  H5Dclose(d);
+  frames_ = static_cast<long>(dims[0]);
+  n_ = dims[1];
+  dim_ = static_cast<int>(dims[2]);
+  // The step/time series can be shorter than value if a run was killed mid-frame: trust the shortest.
+  hid_t t = H5Dopen2(file_, "/particles/all/position/time", H5P_DEFAULT);
+  if (t >= 0) frames_ = std::min(frames_, static_cast<long>(dims_of(t)[0])), H5Dclose(t);
+}
+
+H5mdReader::~H5mdReader() {
+  if (file_ >= 0) H5Fclose(file_);
+}
+
+TrajectoryFrame H5mdReader::frame(long index) const {
+  if (index < 0 || index >= frames_) throw std::out_of_range("frame index");
+  TrajectoryFrame f;
+  auto read_slab = [&](const char* path, std::vector<double>& out) {
+    hid_t d = H5Dopen2(file_, path, H5P_DEFAULT);
+    hid_t fspace = H5Dget_space(d);
+    hsize_t start[3] = {static_cast<hsize_t>(index), 0, 0}, count[3] = {1, n_, static_cast<hsize_t>(dim_)};
+    H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start, nullptr, count, nullptr);
+    hid_t mspace = H5Screate_simple(3, count, nullptr);
+    out.resize(n_ * static_cast<std::size_t>(dim_));
+    check(H5Dread(d, H5T_NATIVE_DOUBLE, mspace, fspace, H5P_DEFAULT, out.data()), path);
+    H5Sclose(mspace), H5Sclose(fspace), H5Dclose(d);
+  };
+  read_slab("/particles/all/position/value", f.position);
+  read_slab("/particles/all/velocity/value", f.velocity);
+  const auto steps = read_all<long>(file_, "/particles/all/position/step");
+  const auto times = read_all<double>(file_, "/particles/all/position/time");
+  f.step = steps[static_cast<std::size_t>(index)];
+  f.time = times[static_cast<std::size_t>(index)];
+  return f;
+}
+
+std::vector<std::array<int, 2>> H5mdReader::bonds() const {
+  const auto flat = read_all<int>(file_, "/connectivity/bonds");
+  std::vector<std::array<int, 2>> b(flat.size() / 2);
+  for (std::size_t k = 0; k < b.size(); ++k) b[k] = {flat[2 * k], flat[2 * k + 1]};
+  return b;
+}
+std::vector<int> H5mdReader::species() const { return read_all<int>(file_, "/particles/all/species"); }
+std::vector<double> H5mdReader::mass() const { return read_all<double>(file_, "/particles/all/mass"); }
+std::vector<double> H5mdReader::observable(const std::string& name) const {
+  auto v = read_all<double>(file_, "/observables/" + name + "/value");
+  if (static_cast<long>(v.size()) > frames_) v.resize(static_cast<std::size_t>(frames_));
+  return v;
+}
+double H5mdReader::parameter(const std::string& name) const { return read_all<double>(file_, "/parameters/" + name).at(0); }
+std::string H5mdReader::scene_text() const {
+  hid_t d = H5Dopen2(file_, "/parameters/scene", H5P_DEFAULT);
+  hid_t type = H5Dget_type(d);
+  std::string s(H5Tget_size(type), '\0');
+  check(H5Dread(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, s.data()), "scene");
+  H5Tclose(type), H5Dclose(d);
+  return s;
+}
+
+}  // namespace pmfrag

@@ -1,0 +1,118 @@
+#include "pmfrag/leapfrog.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace pmfrag {
+
+template <int D>
+Leapfrog<D>::Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>> effects, double dt)
+    : effects_(std::move(effects)) {
+  const std::size_t n = sys.size();
+  s_.dt = dt;
+  s_.r0 = sys.r0;
+  s_.x.resize(n);
+  s_.v.resize(n);
+  s_.f.assign(n, V::Zero());
+  s_.mass.resize(n);
+  s_.inv_mass.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    s_.x[i] = sys.position[i].head<D>();
+    s_.v[i] = sys.velocity[i].head<D>();
+    s_.mass[i] = sys.phase_mass[static_cast<std::size_t>(sys.phase[i])];
+    s_.inv_mass[i] = 1.0 / s_.mass[i];
+  }
+  for (auto& e : effects_) {
+    const unsigned st = e->stages();
+    if (st & stage::force) force_.push_back(e.get());
+    if (st & stage::constrain) constrain_.push_back(e.get());
+    if (st & stage::after_move) after_move_.push_back(e.get());
+    if (st & stage::frame) frame_.push_back(e.get());
+    if (st & stage::observe) observe_.push_back(e.get());
+  }
+  for (auto& e : effects_)
+    if (e->stages() & stage::setup) e->setup(s_);
+  compute_forces();
+}
+
+template <int D>
+void Leapfrog<D>::compute_forces() {
+  std::fill(s_.f.begin(), s_.f.end(), V::Zero());
+  for (auto* e : force_) e->add_forces(s_);
+}
+
+template <int D>
+void Leapfrog<D>::step() {
+  const long n = static_cast<long>(s_.size());
+  const double dt = s_.dt;
+  // Eq. (12): V_1/2 = V_0 + (dt/2) a_0;  Eq. (13): V_k+1/2 = V_k-1/2 + dt a_k.
+  const double h = s_.step == 0 ? 0.5 * dt : dt;
+#pragma omp parallel for schedule(static)
+  for (long k = 0; k < n; ++k) {
+    const std::size_t i = static_cast<std::size_t>(k);
+    s_.v[i] += (h * s_.inv_mass[i]) * s_.f[i];
+  }
+  for (auto* e : constrain_) e->constrain(s_);
+
+  // Eq. (14): r_k+1 = r_k + dt V_k+1/2, guarded.
+  const double limit2 = 0.25 * s_.r0 * s_.r0;
+  long bad = 0;
+#pragma omp parallel for schedule(static) reduction(+ : bad)
+  for (long k = 0; k < n; ++k) {
+    const std::size_t i = static_cast<std::size_t>(k);
+    const V dx = dt * s_.v[i];
+    if (!(dx.squaredNorm() <= limit2)) ++bad;  // also catches NaN
+    s_.x[i] += dx;
+  }
+  if (bad > 0) {
+    for (long k = 0; k < n; ++k) {
+      const std::size_t i = static_cast<std::size_t>(k);
+      const double move = dt * s_.v[i].norm();
+      if (!(move <= 0.5 * s_.r0)) {
+        std::ostringstream msg;
+        msg << "unstable: particle " << k << " at step " << s_.step << " (t = " << s_.time() << " s) ";
+        if (!std::isfinite(move))
+          msg << "has a non-finite velocity";
+        else
+          msg << "would move " << move << " cm in one step (more than r0/2 = " << 0.5 * s_.r0 << " cm)";
+        msg << "; reduce dt (now " << dt << " s) or check the scene";
+        throw GuardError(msg.str(), s_.step, s_.time(), k);
+      }
+    }
+  }
+  ++s_.step;
+  for (auto* e : after_move_) e->after_move(s_, 0.0);
+  compute_forces();
+}
+
+template <int D>
+void Leapfrog<D>::whole_step_velocity(std::vector<V>& out) const {
+  const std::size_t n = s_.size();
+  out.resize(n);
+  const double h = s_.step == 0 ? 0.0 : 0.5 * s_.dt;
+  for (std::size_t i = 0; i < n; ++i) out[i] = s_.v[i] + (h * s_.inv_mass[i]) * s_.f[i];
+  for (auto* e : frame_) e->frame_velocity(out);
+}
+
+template <int D>
+Observables Leapfrog<D>::observe() const {
+  Observables o;
+  std::vector<V> v;
+  whole_step_velocity(v);
+  double ke = 0.0;
+  for (std::size_t i = 0; i < v.size(); ++i) ke += 0.5 * s_.mass[i] * v[i].squaredNorm();
+  o.kinetic = ke;
+  for (auto* e : observe_) e->observe(s_, o);
+  return o;
+}
+
+template <int D>
+void Leapfrog<D>::canonicalize() {
+  for (auto& e : effects_) e->canonicalize(s_);
+  compute_forces();
+}
+
+template class Leapfrog<2>;
+template class Leapfrog<3>;
+
+}  // namespace pmfrag

@@ -1,0 +1,281 @@
+// The pair effect: the (p,q) law of Eq. (22) between particles, under one of two readings (physics.md):
+//  bonded - the original nearest-neighbour bonds interact until they first exceed D, then are gone for good;
+//           particles not bonded repel by the law's repulsive branch (r < r0) so fragments collide.
+//  cutoff - Greenspan's reading: every pair closer than D interacts; pairs form and break freely.
+// Pair forces are computed once per pair into an array and gathered per particle in a fixed order, so the
+// result is bitwise the same for any number of threads.
+#include "pmfrag/effects.hpp"
+#include "pmfrag/neighbors.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace pmfrag {
+
+namespace {
+
+/// A list of pairs (i < j) with per-pair law and force, and per-particle incidence for the gather.
+template <int D>
+struct PairTable {
+  using V = Eigen::Matrix<double, D, 1>;
+  std::vector<int> i, j, law;
+  std::vector<V> force;  ///< force on i (j gets the opposite)
+  std::vector<int> offset, entry;  ///< CSR: entry = pair << 1 | (particle is j)
+
+  std::size_t size() const { return i.size(); }
+  void clear() { i.clear(), j.clear(), law.clear(); }
+  void add(int a, int b, int l) { i.push_back(a), j.push_back(b), law.push_back(l); }
+  void index(std::size_t n) {
+    force.assign(size(), V::Zero());
+    offset.assign(n + 1, 0);
+    for (std::size_t p = 0; p < size(); ++p) ++offset[static_cast<std::size_t>(i[p]) + 1], ++offset[static_cast<std::size_t>(j[p]) + 1];
+    for (std::size_t k = 0; k < n; ++k) offset[k + 1] += offset[k];
+    entry.resize(static_cast<std::size_t>(offset[n]));
+    std::vector<int> fill(offset.begin(), offset.end() - 1);
+    for (std::size_t p = 0; p < size(); ++p) {  // ascending p: a fixed order per particle
+      entry[static_cast<std::size_t>(fill[static_cast<std::size_t>(i[p])]++)] = static_cast<int>(p << 1);
+      entry[static_cast<std::size_t>(fill[static_cast<std::size_t>(j[p])]++)] = static_cast<int>(p << 1 | 1);
+    }
+  }
+  void gather(std::vector<V>& f) const {
+    const long n = static_cast<long>(f.size());
+#pragma omp parallel for schedule(static)
+    for (long k = 0; k < n; ++k) {
+      V s = V::Zero();
+      for (int e = offset[static_cast<std::size_t>(k)]; e < offset[static_cast<std::size_t>(k) + 1]; ++e) {
+        const int en = entry[static_cast<std::size_t>(e)];
+        const V& fp = force[static_cast<std::size_t>(en >> 1)];
+        if (en & 1)
+          s -= fp;
+        else
+          s += fp;
+      }
+      f[static_cast<std::size_t>(k)] += s;
+    }
+  }
+};
+
+enum class Mode { bond, cutoff, contact };
+
+// Force on i from the law at separation d = x_i - x_j; the force is held constant inside r_min (Sec. 4.2).
+template <int D>
+inline Eigen::Matrix<double, D, 1> law_force(const PairLaw& law, const Eigen::Matrix<double, D, 1>& d, double inv,
+                                             double inv_rmin) {
+  const double ie = std::min(inv, inv_rmin);
+  const double mag = -law.G * ipow(ie, law.p) + law.H * ipow(ie, law.q);  // > 0 repulsive
+  return (mag * inv) * d;
+}
+
+// Potential with the r_min clamp continued linearly (phi' = -F, F constant inside r_min).
+inline double law_potential(const PairLaw& law, double r, double r_min) {
+  if (r >= r_min) return law.potential(r);
+  return law.potential(r_min) + law.force(r_min) * (r_min - r);
+}
+
+template <int D>
+class PairEffect final : public Effect<D> {
+ public:
+  using V = Eigen::Matrix<double, D, 1>;
+
+  PairEffect(const System& sys, const PairSpec& spec) : spec_(spec) {
+    laws_ = sys.laws;
+    phase_ = sys.phase;
+    nphase_ = sys.phase_names.size();
+    pair_law_ = sys.phase_pair_law;
+    cutoff_ = sys.cutoff;
+    inv_rmin_ = sys.r_min > 0.0 ? 1.0 / sys.r_min : std::numeric_limits<double>::infinity();
+    r_min_ = sys.r_min;
+    for (const auto& b : sys.bonds) bonds_.add(b[0], b[1], law_of(b[0], b[1]));
+    bonds_.index(sys.size());
+    alive_.assign(bonds_.size(), 1);
+    phi_break_.assign(bonds_.size(), 0.0);
+    contact_reach_.resize(laws_.size());
+    for (std::size_t l = 0; l < laws_.size(); ++l) contact_reach_[l] = laws_[l].equilibrium_spacing();
+    max_reach_ = spec_.model == PairModel::cutoff ? cutoff_ : *std::max_element(contact_reach_.begin(), contact_reach_.end());
+    skin_ = 0.3 * sys.r0;
+    uses_list_ = spec_.model == PairModel::cutoff || spec_.contact;
+  }
+
+  std::string name() const override { return spec_.model == PairModel::bonded ? "pair (bonded)" : "pair (cutoff)"; }
+  unsigned stages() const override {
+    return stage::setup | stage::force | stage::observe | (uses_list_ ? stage::after_move : 0u);
+  }
+
+  void setup(State<D>& s) override {
+    if (uses_list_) rebuild(s);
+  }
+  void canonicalize(const State<D>& s) override {
+    if (uses_list_) rebuild(s);
+  }
+
+  void add_forces(State<D>& s) override {
+    if (spec_.model == PairModel::bonded) {
+      const long broke = compute<Mode::bond>(s, bonds_);
+      bonds_.gather(s.f);
+      if (broke > 0 && first_break_step_ < 0) first_break_step_ = s.step;
+    }
+    if (uses_list_ && list_.size() > 0) {
+      if (spec_.model == PairModel::cutoff)
+        compute<Mode::cutoff>(s, list_);
+      else
+        compute<Mode::contact>(s, list_);
+      list_.gather(s.f);
+    }
+  }
+
+  void after_move(State<D>& s, double max_displacement) override {
+    // Verlet criterion on the displacement since the list was built (tracked by the integrator's move).
+    (void)max_displacement;
+    double worst = 0.0;
+    const long n = static_cast<long>(s.size());
+#pragma omp parallel for schedule(static) reduction(max : worst)
+    for (long k = 0; k < n; ++k)
+      worst = std::max(worst, (s.x[static_cast<std::size_t>(k)] - xref_[static_cast<std::size_t>(k)]).squaredNorm());
+    if (!(worst < 0.25 * skin_ * skin_)) rebuild(s);
+  }
+
+  void observe(const State<D>& s, Observables& o) const override {
+    double pe = 0.0;
+    long beyond = 0;
+    for (std::size_t b = 0; b < bonds_.size(); ++b) {
+      const double r = (s.x[static_cast<std::size_t>(bonds_.i[b])] - s.x[static_cast<std::size_t>(bonds_.j[b])]).norm();
+      if (spec_.model == PairModel::bonded) {
+        if (alive_[b])
+          pe += law_potential(laws_[static_cast<std::size_t>(bonds_.law[b])], r, r_min_);
+        else
+          ++beyond, o.bond_break_energy += phi_break_[b];
+      } else if (r > cutoff_) {
+        ++beyond;
+      }
+    }
+    for (std::size_t p = 0; p < list_.size(); ++p) {
+      const double r = (s.x[static_cast<std::size_t>(list_.i[p])] - s.x[static_cast<std::size_t>(list_.j[p])]).norm();
+      const PairLaw& law = laws_[static_cast<std::size_t>(list_.law[p])];
+      if (spec_.model == PairModel::cutoff) {
+        if (r <= cutoff_) pe += law_potential(law, r, r_min_);
+      } else {
+        const double reach = contact_reach_[static_cast<std::size_t>(list_.law[p])];
+        if (r < reach) pe += law_potential(law, r, r_min_) - law.potential(reach);
+      }
+    }
+    o.potential += pe;
+    o.pairs_beyond_cutoff += beyond;
+  }
+
+  const std::vector<std::uint8_t>& alive() const { return alive_; }
+  long first_break_step() const { return first_break_step_; }
+
+ private:
+  int law_of(int a, int b) const {
+    return pair_law_[static_cast<std::size_t>(phase_[static_cast<std::size_t>(a)]) * nphase_ +
+                     static_cast<std::size_t>(phase_[static_cast<std::size_t>(b)])];
+  }
+
+  // Returns the number of bonds broken in this evaluation (bond mode).
+  template <Mode mode>
+  long compute(State<D>& s, PairTable<D>& t) {
+    const double cut2 = cutoff_ * cutoff_;
+    const long m = static_cast<long>(t.size());
+    const PairLaw* laws = laws_.data();
+    const double* reach = contact_reach_.data();
+    const double inv_rmin = inv_rmin_;
+    const double r_min = r_min_;
+    std::uint8_t* alive = alive_.data();
+    double* phi_break = phi_break_.data();
+    long broke = 0;
+#pragma omp parallel for schedule(static) reduction(+ : broke)
+    for (long p = 0; p < m; ++p) {
+      const std::size_t u = static_cast<std::size_t>(p);
+      const V d = s.x[static_cast<std::size_t>(t.i[u])] - s.x[static_cast<std::size_t>(t.j[u])];
+      const double r2 = d.squaredNorm();
+      const PairLaw& law = laws[t.law[u]];
+      V f = V::Zero();
+      if constexpr (mode == Mode::bond) {
+        if (alive[u]) {
+          if (r2 > cut2) {  // broken for good the first time it exceeds D
+            alive[u] = 0;
+            ++broke;
+            phi_break[u] = law_potential(law, std::sqrt(r2), r_min);
+          } else {
+            f = law_force<D>(law, d, 1.0 / std::sqrt(r2), inv_rmin);
+          }
+        }
+      } else if constexpr (mode == Mode::cutoff) {
+        if (r2 <= cut2) f = law_force<D>(law, d, 1.0 / std::sqrt(r2), inv_rmin);
+      } else {
+        const double rc = reach[t.law[u]];
+        if (r2 < rc * rc) f = law_force<D>(law, d, 1.0 / std::sqrt(r2), inv_rmin);
+      }
+      t.force[u] = f;
+    }
+    return broke;
+  }
+
+  // Verlet list of pairs within reach + skin. Bonded: excludes intact bonds (they act through the bond list).
+  void rebuild(const State<D>& s) {
+    list_.clear();
+    const std::size_t n = s.size();
+    std::vector<int> bond_off, bond_other;
+    if (spec_.model == PairModel::bonded) {
+      // intact-bond lookup per particle
+      bond_off.assign(n + 1, 0);
+      for (std::size_t b = 0; b < bonds_.size(); ++b)
+        if (alive_[b]) ++bond_off[static_cast<std::size_t>(bonds_.i[b]) + 1];
+      for (std::size_t k = 0; k < n; ++k) bond_off[k + 1] += bond_off[k];
+      bond_other.resize(static_cast<std::size_t>(bond_off[n]));
+      std::vector<int> fill(bond_off.begin(), bond_off.end() - 1);
+      for (std::size_t b = 0; b < bonds_.size(); ++b)
+        if (alive_[b]) bond_other[static_cast<std::size_t>(fill[static_cast<std::size_t>(bonds_.i[b])]++)] = bonds_.j[b];
+    }
+    cells_.for_each_pair(s.x, max_reach_ + skin_, [&](std::uint32_t a, std::uint32_t b, double) {
+      if (spec_.model == PairModel::bonded) {
+        for (int e = bond_off[a]; e < bond_off[a + 1]; ++e)
+          if (bond_other[static_cast<std::size_t>(e)] == static_cast<int>(b)) return;
+      }
+      list_.add(static_cast<int>(a), static_cast<int>(b), law_of(static_cast<int>(a), static_cast<int>(b)));
+    });
+    list_.index(n);
+    xref_ = s.x;
+    ++rebuilds_;
+  }
+
+  PairSpec spec_;
+  std::vector<PairLaw> laws_;
+  std::vector<int> phase_, pair_law_;
+  std::size_t nphase_ = 1;
+  double cutoff_ = 0.0, inv_rmin_ = 0.0, r_min_ = 0.0, skin_ = 0.0, max_reach_ = 0.0;
+  std::vector<double> contact_reach_;
+  bool uses_list_ = false;
+  PairTable<D> bonds_, list_;
+  std::vector<std::uint8_t> alive_;
+  std::vector<double> phi_break_;
+  long first_break_step_ = -1;
+  std::vector<V> xref_;
+  CellList<D> cells_;
+  long rebuilds_ = 0;
+};
+
+}  // namespace
+
+template <int D>
+std::unique_ptr<Effect<D>> make_pair_effect(const System& sys, const PairSpec& spec) {
+  return std::make_unique<PairEffect<D>>(sys, spec);
+}
+
+template <int D>
+BondView<D> bond_view(const Effect<D>& e) {
+  BondView<D> v;
+  if (auto* p = dynamic_cast<const PairEffect<D>*>(&e)) {
+    v.alive = &p->alive();
+    v.first_break_step = p->first_break_step();
+  }
+  return v;
+}
+
+template std::unique_ptr<Effect<2>> make_pair_effect<2>(const System&, const PairSpec&);
+template std::unique_ptr<Effect<3>> make_pair_effect<3>(const System&, const PairSpec&);
+template BondView<2> bond_view<2>(const Effect<2>&);
+template BondView<3> bond_view<3>(const Effect<3>&);
+
+}  // namespace pmfrag

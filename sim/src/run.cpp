@@ -1,0 +1,132 @@
+#include "pmfrag/run.hpp"
+
+#include "pmfrag/h5md.hpp"
+#include "pmfrag/leapfrog.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+namespace pmfrag {
+
+namespace {
+
+std::string fmt(const char* f, double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
+}
+
+template <int D>
+RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, double dt, double limit) {
+  RunResult res;
+  res.particles = sys.size();
+  res.dt = dt;
+  res.dt_limit = limit;
+  const long steps = std::max(1L, std::lround(scene.time.end / dt));
+  const long every = std::max(1L, std::lround(scene.output.every / dt));
+  RunParameters rp{dt, limit, scene.time.end, every};
+
+  namespace fs = std::filesystem;
+  const fs::path dir(opt.out_dir);
+  fs::create_directories(dir);
+  const fs::path traj = dir / "trajectory.h5";
+  if (fs::exists(traj) && !opt.force)
+    throw std::runtime_error(traj.string() + " exists; use --force to overwrite it");
+  H5mdWriter writer(traj.string(), sys, scene, rp);
+
+  Leapfrog<D> lf(sys, make_effects<D>(sys, scene), dt);
+  if (opt.log) {
+    std::string names;
+    for (const auto& e : lf.effects()) names += (names.empty() ? "" : ", ") + e->name();
+    opt.log("effects: " + (names.empty() ? std::string("none") : names));
+    opt.log(std::to_string(sys.size()) + " particles, " + std::to_string(sys.bonds.size()) + " bonds, " +
+            std::to_string(steps) + " steps, a frame every " + std::to_string(every) + " steps");
+  }
+
+  std::vector<Eigen::Matrix<double, D, 1>> v;
+  std::vector<double> xbuf, vbuf;
+  auto write = [&] {
+    const auto& s = lf.state();
+    lf.whole_step_velocity(v);
+    xbuf.resize(s.size() * D);
+    vbuf.resize(s.size() * D);
+    for (std::size_t i = 0; i < s.size(); ++i)
+      for (int d = 0; d < D; ++d) xbuf[i * D + d] = s.x[i][d], vbuf[i * D + d] = v[i][d];
+    writer.write_frame(s.step, s.time(), xbuf, vbuf, lf.observe());
+  };
+
+  using clock = std::chrono::steady_clock;
+  const auto t0 = clock::now();
+  auto last_report = t0;
+  try {
+    write();
+    while (lf.state().step < steps) {
+      lf.step();
+      const long k = lf.state().step;
+      if (k % every == 0 || k == steps) write();
+      if (opt.progress && (k & 255) == 0) {
+        const auto now = clock::now();
+        if (std::chrono::duration<double>(now - last_report).count() > 0.2) {
+          last_report = now;
+          Progress p;
+          p.wall_s = std::chrono::duration<double>(now - t0).count();
+          p.step = k, p.steps = steps, p.time = lf.state().time(), p.end = scene.time.end;
+          p.steps_per_s = k / p.wall_s;
+          p.eta_s = (steps - k) / p.steps_per_s;
+          opt.progress(p);
+        }
+      }
+    }
+    res.completed = true;
+  } catch (const GuardError& e) {
+    res.completed = false;
+    res.message = e.what();
+  }
+  res.wall_s = std::chrono::duration<double>(clock::now() - t0).count();
+  res.steps = lf.state().step;
+  res.frames = writer.frames();
+  writer.close();
+  for (const auto& e : lf.effects()) {
+    const auto bv = bond_view<D>(*e);
+    if (bv.alive && bv.first_break_step >= 0) res.first_break_time = static_cast<double>(bv.first_break_step) * dt;
+  }
+
+  // run.json: what ran and how fast (for sweeps and benchmarks); written whole, then renamed.
+  const fs::path tmp = dir / "run.json.tmp";
+  {
+    std::ofstream js(tmp);
+    js << "{\n  \"completed\": " << (res.completed ? "true" : "false") << ",\n  \"message\": \"";
+    for (char c : res.message) js << (c == '"' || c == '\\' ? std::string("\\") + c : std::string(1, c));
+    js << "\",\n  \"particles\": " << res.particles << ",\n  \"steps\": " << res.steps
+       << ",\n  \"frames\": " << res.frames << ",\n  \"dt_s\": " << fmt("%.10g", dt)
+       << ",\n  \"dt_limit_s\": " << fmt("%.10g", limit) << ",\n  \"wall_s\": " << fmt("%.6g", res.wall_s)
+       << ",\n  \"particle_steps_per_s\": " << fmt("%.6g", res.particle_steps_per_s())
+       << ",\n  \"first_break_time_s\": " << fmt("%.10g", res.first_break_time) << "\n}\n";
+  }
+  fs::rename(tmp, dir / "run.json");
+  return res;
+}
+
+}  // namespace
+
+RunResult run_scene(const Scene& scene, const RunOptions& opt) {
+  const System sys = build_system(scene);
+  const double limit = system_dt_limit(sys);
+  const double dt = scene.time.auto_dt ? scene.time.safety * limit : scene.time.dt;
+  if (opt.log)
+    opt.log("dt = " + fmt("%.4g", dt) + " s, Eq. 15 limit = " + fmt("%.4g", limit) + " s" +
+            (sys.r_min > 0 ? " (at r_min = " + fmt("%.3g", sys.r_min) + " cm)" : " (stretch, at r0)") +
+            ", dt/limit = " + fmt("%.3f", dt / limit));
+  if (dt > limit && !opt.allow_unstable)
+    throw UnstableStepError(scene.file + ": time.dt = " + fmt("%.4g", dt) + " s exceeds the Eq. 15 stability limit " +
+                            fmt("%.4g", limit) + " s (ratio " + fmt("%.3f", dt / limit) +
+                            "); lower it, use dt = \"auto\", or pass --allow-unstable");
+  if (scene.time.end < dt) throw SceneError(scene.file + ": time.end is shorter than one step");
+  if (scene.dim == 2) return run_dim<2>(scene, sys, opt, dt, limit);
+  return run_dim<3>(scene, sys, opt, dt, limit);
+}
+
+}  // namespace pmfrag

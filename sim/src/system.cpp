@@ -1,0 +1,206 @@
+#include "pmfrag/system.hpp"
+
+#include "pmfrag/neighbors.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+namespace pmfrag {
+
+namespace {
+
+Sites generate_sites(const BodySpec& b, int dim) {
+  if (b.lattice == LatticeKind::greenspan_plate) return greenspan_plate();
+  Vec3 origin;
+  int nx = 1, ny = 1, nz = 1;
+  if (b.sites) {
+    origin = *b.origin;
+    nx = (*b.sites)[0];
+    ny = (*b.sites)[1];
+    nz = dim == 3 ? (*b.sites)[2] : 1;
+  } else {
+    Vec3 lo, hi;
+    if (b.shape.kind == Region::Kind::disc || b.shape.kind == Region::Kind::sphere) {
+      lo = b.shape.center - Vec3::Constant(b.shape.radius);
+      hi = b.shape.center + Vec3::Constant(b.shape.radius);
+    } else {
+      lo = b.shape.min;
+      hi = b.shape.max;
+    }
+    if (dim == 2) lo.z() = hi.z() = 0.0;
+    origin = b.origin ? *b.origin : lo;
+    lattice_counts_for(origin, hi, b.r0, dim, nx, ny, nz);
+  }
+  if (static_cast<double>(nx) * ny * nz > 5e7) throw SceneError("body '" + b.name + "': more than 5e7 lattice sites");
+  if (dim == 2) return triangular_lattice(b.r0, origin, nx, ny);
+  return close_packed_lattice(b.r0, origin, nx, ny, nz, b.lattice == LatticeKind::fcc ? Stacking::fcc : Stacking::hcp);
+}
+
+int phase_index(const Scene& sc, const std::string& name) {
+  for (std::size_t i = 0; i < sc.phases.size(); ++i)
+    if (sc.phases[i].name == name) return static_cast<int>(i);
+  throw SceneError(sc.file + ": no phase named '" + name + "'");
+}
+
+}  // namespace
+
+System build_system(const Scene& sc) {
+  System sys;
+  sys.dim = sc.dim;
+  sys.r0 = sc.bodies.front().r0;
+  const PairSpec pair = sc.pair.value_or(PairSpec{});
+  sys.cutoff = pair.cutoff_r0 * sys.r0;
+  sys.r_min = pair.r_min_r0 * sys.r0;
+
+  // Phases: derive or take each law and mass.
+  for (const auto& ph : sc.phases) {
+    sys.phase_names.push_back(ph.name);
+    if (ph.derived) {
+      const Material m = derive_material(ph.p, ph.q, sys.r0, ph.block);
+      sys.laws.push_back(m.law);
+      sys.phase_mass.push_back(m.mass_g);
+    } else {
+      sys.laws.push_back(PairLaw{ph.p, ph.q, ph.G, ph.H});
+      sys.phase_mass.push_back(ph.mass);
+    }
+  }
+  const std::size_t np = sc.phases.size();
+  sys.phase_pair_law.assign(np * np, -1);
+  for (std::size_t a = 0; a < np; ++a) sys.phase_pair_law[a * np + a] = static_cast<int>(a);
+  for (const auto& in : sc.interfaces) {
+    const int a = phase_index(sc, in.a), b = phase_index(sc, in.b);
+    PairLaw law;
+    if (in.explicit_law) {
+      law = in.law;
+    } else {  // the weaker of the two (smaller peak force), scaled
+      const PairLaw& la = sys.laws[static_cast<std::size_t>(a)];
+      const PairLaw& lb = sys.laws[static_cast<std::size_t>(b)];
+      law = la.peak_force() <= lb.peak_force() ? la : lb;
+      law.G *= in.scale;
+      law.H *= in.scale;
+    }
+    sys.laws.push_back(law);
+    const int idx = static_cast<int>(sys.laws.size() - 1);
+    sys.phase_pair_law[static_cast<std::size_t>(a) * np + b] = idx;
+    sys.phase_pair_law[static_cast<std::size_t>(b) * np + a] = idx;
+  }
+  for (std::size_t a = 0; a < np; ++a)
+    for (std::size_t b = 0; b < np; ++b)
+      if (sys.phase_pair_law[a * np + b] < 0) {  // undeclared interface: the weaker phase law
+        const PairLaw& la = sys.laws[a];
+        const PairLaw& lb = sys.laws[b];
+        sys.laws.push_back(la.peak_force() <= lb.peak_force() ? la : lb);
+        sys.phase_pair_law[a * np + b] = sys.phase_pair_law[b * np + a] = static_cast<int>(sys.laws.size() - 1);
+      }
+
+  // Bodies: sites, shape, holes, voids; then phases by region.
+  std::vector<std::size_t> body_begin;
+  for (std::size_t bi = 0; bi < sc.bodies.size(); ++bi) {
+    const BodySpec& b = sc.bodies[bi];
+    sys.body_names.push_back(b.name);
+    body_begin.push_back(sys.size());
+    const Sites sites = generate_sites(b, sc.dim);
+    const std::set<int> voids(b.void_sites.begin(), b.void_sites.end());
+    for (int v : voids)
+      if (v < 1 || v > static_cast<int>(sites.position.size()))
+        throw SceneError(sc.file + ": body '" + b.name + "': void site " + std::to_string(v) + " is not in 1.." +
+                         std::to_string(sites.position.size()));
+    const int body_phase = phase_index(sc, b.phase);
+    for (std::size_t s = 0; s < sites.position.size(); ++s) {
+      const Vec3& x = sites.position[s];
+      if (voids.count(sites.index[s])) continue;
+      if (!b.shape.contains(x)) continue;
+      bool in_hole = false;
+      for (const auto& h : b.holes) in_hole = in_hole || h.contains(x);
+      if (in_hole) continue;
+      sys.position.push_back(x);
+      sys.velocity.push_back(Vec3::Zero());
+      sys.phase.push_back(body_phase);
+      sys.body.push_back(static_cast<int>(bi));
+      sys.site.push_back(sites.index[s]);
+    }
+    if (sys.size() == body_begin.back())
+      throw SceneError(sc.file + ": body '" + b.name + "' has no particles (shape, holes and voids remove every site)");
+  }
+  for (std::size_t p = 0; p < sc.phases.size(); ++p) {
+    if (!sc.phases[p].region) continue;
+    std::size_t count = 0;
+    for (std::size_t i = 0; i < sys.size(); ++i)
+      if (sc.phases[p].region->contains(sys.position[i])) sys.phase[i] = static_cast<int>(p), ++count;
+    if (count == 0)
+      throw SceneError(sc.file + ": phase '" + sc.phases[p].name + "': region " + sc.phases[p].region->describe() +
+                       " selects no particle");
+  }
+
+  // Original bonds: nearest neighbours (second shell is at sqrt(2) r0 or more) of the same body, minus
+  // those crossing a slit. Also refuse overlapping particles.
+  CellList<3> cells;
+  const double bond_reach = 1.2 * sys.r0;
+  cells.for_each_pair(sys.position, bond_reach, [&](std::uint32_t i, std::uint32_t j, double r2) {
+    if (r2 < 0.25 * sys.r0 * sys.r0)
+      throw SceneError(sc.file + ": particles " + std::to_string(i) + " and " + std::to_string(j) + " overlap (" +
+                       std::to_string(std::sqrt(r2)) + " cm apart, r0 = " + std::to_string(sys.r0) + " cm)");
+    if (sys.body[i] != sys.body[j]) return;
+    const auto& slits = sc.bodies[static_cast<std::size_t>(sys.body[i])].slits;
+    for (const auto& s : slits)
+      if (s.crossed_by(sys.position[i], sys.position[j])) return;
+    sys.bonds.push_back({static_cast<int>(i), static_cast<int>(j)});
+  });
+  std::sort(sys.bonds.begin(), sys.bonds.end());
+
+  // Initial velocities of impactors.
+  for (const auto& im : sc.impactors) {
+    const auto idx = select_particles(sys, Selection{Selection::Kind::body, {}, im.body}, "impactor");
+    for (int i : idx) sys.velocity[static_cast<std::size_t>(i)] = im.velocity;
+  }
+  return sys;
+}
+
+std::vector<int> select_particles(const System& sys, const Selection& sel, const std::string& what) {
+  std::vector<int> out;
+  const std::size_t n = sys.size();
+  if (sel.kind == Selection::Kind::top_row || sel.kind == Selection::Kind::bottom_row) {
+    double ext = sel.kind == Selection::Kind::top_row ? -INFINITY : INFINITY;
+    for (const auto& x : sys.position) ext = sel.kind == Selection::Kind::top_row ? std::max(ext, x.y()) : std::min(ext, x.y());
+    const double band = 0.25 * sys.r0;  // rows are r0 sin60 = 0.87 r0 apart
+    for (std::size_t i = 0; i < n; ++i)
+      if (std::fabs(sys.position[i].y() - ext) < band) out.push_back(static_cast<int>(i));
+  } else {
+    int name_index = -1;
+    if (sel.kind == Selection::Kind::phase || sel.kind == Selection::Kind::body) {
+      const auto& names = sel.kind == Selection::Kind::phase ? sys.phase_names : sys.body_names;
+      for (std::size_t k = 0; k < names.size(); ++k)
+        if (names[k] == sel.name) name_index = static_cast<int>(k);
+      if (name_index < 0) throw SceneError(what + ": " + sel.describe() + " does not exist");
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      bool pick = false;
+      switch (sel.kind) {
+        case Selection::Kind::all: pick = true; break;
+        case Selection::Kind::region: pick = sel.region.contains(sys.position[i]); break;
+        case Selection::Kind::phase: pick = sys.phase[i] == name_index; break;
+        case Selection::Kind::body: pick = sys.body[i] == name_index; break;
+        default: break;
+      }
+      if (pick) out.push_back(static_cast<int>(i));
+    }
+  }
+  if (out.empty()) throw SceneError(what + ": " + sel.describe() + " selects no particle");
+  return out;
+}
+
+double system_dt_limit(const System& sys) {
+  double limit = INFINITY;
+  const std::size_t np = sys.phase_names.size();
+  for (std::size_t a = 0; a < np; ++a)
+    for (std::size_t b = 0; b < np; ++b) {
+      const PairLaw& law = sys.law(static_cast<int>(a), static_cast<int>(b));
+      const double m = std::min(sys.phase_mass[a], sys.phase_mass[b]);
+      const double r = sys.r_min > 0.0 ? sys.r_min : law.equilibrium_spacing();
+      limit = std::min(limit, dt_limit(law, m, r));
+    }
+  return limit;
+}
+
+}  // namespace pmfrag
