@@ -16,7 +16,9 @@ Eigen::Matrix<double, D, 1> head(const Vec3& v) {
 }
 
 /// Kinematic boundary (Sec. 4.2): selected particles move at a prescribed velocity whatever the forces.
-/// Tallies the work the boundary does: the constraint force is -f_i, so dW = -f_i . u dt each step.
+/// Tallies the work the boundary does: its force on particle i is -f_i, so dW/dt = g = -sum f_i . u. The sum
+/// over steps uses the trapezoid rule (the left-point sum plus an end correction at output), which is what
+/// leapfrog's second-order energy balance needs.
 template <int D>
 class Kinematic final : public Effect<D> {
  public:
@@ -30,24 +32,27 @@ class Kinematic final : public Effect<D> {
     for (int i : index_) s.v[static_cast<std::size_t>(i)] = u_;
   }
   void constrain(State<D>& s) override {
-    double w = 0.0;
-    for (int i : index_) {
-      w -= s.f[static_cast<std::size_t>(i)].dot(u_);
-      s.v[static_cast<std::size_t>(i)] = u_;
-    }
-    work_ += w * s.dt;
+    const double g = power(s);
+    if (s.step == 0) g0_ = g;
+    left_sum_ += g * s.dt;
+    for (int i : index_) s.v[static_cast<std::size_t>(i)] = u_;
   }
   void frame_velocity(std::vector<V>& v) const override {
     for (int i : index_) v[static_cast<std::size_t>(i)] = u_;
   }
-  void observe(const State<D>&, Observables& o) const override { o.boundary_work += work_; }
-  double work() const { return work_; }
-  void set_work(double w) { work_ = w; }
+  void observe(const State<D>& s, Observables& o) const override {
+    if (s.step > 0) o.boundary_work += left_sum_ + 0.5 * s.dt * (power(s) - g0_);
+  }
 
  private:
+  double power(const State<D>& s) const {
+    double g = 0.0;
+    for (int i : index_) g -= s.f[static_cast<std::size_t>(i)].dot(u_);
+    return g;
+  }
   V u_;
   std::vector<int> index_;
-  double work_ = 0.0;
+  double left_sum_ = 0.0, g0_ = 0.0;
 };
 
 template <int D>

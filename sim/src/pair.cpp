@@ -45,11 +45,7 @@ struct PairTable {
       V s = V::Zero();
       for (int e = offset[static_cast<std::size_t>(k)]; e < offset[static_cast<std::size_t>(k) + 1]; ++e) {
         const int en = entry[static_cast<std::size_t>(e)];
-        const V& fp = force[static_cast<std::size_t>(en >> 1)];
-        if (en & 1)
-          s -= fp;
-        else
-          s += fp;
+        s += (1.0 - 2.0 * (en & 1)) * force[static_cast<std::size_t>(en >> 1)];  // j gets -F
       }
       f[static_cast<std::size_t>(k)] += s;
     }
@@ -57,15 +53,6 @@ struct PairTable {
 };
 
 enum class Mode { bond, cutoff, contact };
-
-// Force on i from the law at separation d = x_i - x_j; the force is held constant inside r_min (Sec. 4.2).
-template <int D>
-inline Eigen::Matrix<double, D, 1> law_force(const PairLaw& law, const Eigen::Matrix<double, D, 1>& d, double inv,
-                                             double inv_rmin) {
-  const double ie = std::min(inv, inv_rmin);
-  const double mag = -law.G * ipow(ie, law.p) + law.H * ipow(ie, law.q);  // > 0 repulsive
-  return (mag * inv) * d;
-}
 
 // Potential with the r_min clamp continued linearly (phi' = -F, F constant inside r_min).
 inline double law_potential(const PairLaw& law, double r, double r_min) {
@@ -172,44 +159,106 @@ class PairEffect final : public Effect<D> {
                      static_cast<std::size_t>(phase_[static_cast<std::size_t>(b)])];
   }
 
-  // Returns the number of bonds broken in this evaluation (bond mode).
+  // Returns the number of bonds broken in this evaluation (bond mode). The kernel is branch-free (a select,
+  // not a branch, decides whether a pair acts), so it vectorizes; the rare step where bonds break is
+  // finished by a serial pass that retires them.
   template <Mode mode>
   long compute(State<D>& s, PairTable<D>& t) {
+    if (nphase_ == 1) {
+      const PairLaw& l = laws_.front();
+      const double reach2 = contact_reach_.front() * contact_reach_.front();
+      // The paper's three laws get compile-time exponents (straight multiplications); others a runtime power.
+      if (l.p == 7 && l.q == 14) return kernel<mode>(s, t, FixedLaw<7, 14>{l.G, l.H, reach2});
+      if (l.p == 5 && l.q == 10) return kernel<mode>(s, t, FixedLaw<5, 10>{l.G, l.H, reach2});
+      if (l.p == 3 && l.q == 5) return kernel<mode>(s, t, FixedLaw<3, 5>{l.G, l.H, reach2});
+      return kernel<mode>(s, t, OneLaw{l, reach2});
+    }
+    return kernel<mode>(s, t, ManyLaws{laws_.data(), t.law.data(), contact_reach_.data()});
+  }
+
+  template <int N>
+  static double pw(double x) {
+    if constexpr (N == 0) return 1.0;
+    else if constexpr (N == 1) return x;
+    else if constexpr (N % 2 == 0) { const double h = pw<N / 2>(x); return h * h; }
+    else return x * pw<N - 1>(x);
+  }
+  template <int P, int Q>
+  struct FixedLaw {
+    double G, H, reach2;
+    double magnitude(std::size_t, double ie) const { return -G * pw<P>(ie) + H * pw<Q>(ie); }
+    double contact2(std::size_t) const { return reach2; }
+  };
+  struct OneLaw {
+    PairLaw law;
+    double reach2;
+    double magnitude(std::size_t, double ie) const { return -law.G * ipow(ie, law.p) + law.H * ipow(ie, law.q); }
+    double contact2(std::size_t) const { return reach2; }
+  };
+  struct ManyLaws {
+    const PairLaw* laws;
+    const int* id;
+    const double* reach;
+    double magnitude(std::size_t u, double ie) const {
+      const PairLaw& l = laws[id[u]];
+      return -l.G * ipow(ie, l.p) + l.H * ipow(ie, l.q);
+    }
+    double contact2(std::size_t u) const { return reach[id[u]] * reach[id[u]]; }
+  };
+
+  template <Mode mode, class Law>
+  long kernel(State<D>& s, PairTable<D>& t, const Law law) {
     const double cut2 = cutoff_ * cutoff_;
     const long m = static_cast<long>(t.size());
-    const PairLaw* laws = laws_.data();
-    const double* reach = contact_reach_.data();
     const double inv_rmin = inv_rmin_;
-    const double r_min = r_min_;
-    std::uint8_t* alive = alive_.data();
-    double* phi_break = phi_break_.data();
+    const std::uint8_t* __restrict alive = alive_.data();
+    const int* __restrict pi = t.i.data();
+    const int* __restrict pj = t.j.data();
+    const double* __restrict x = s.x.front().data();
+    double* __restrict out = t.force.front().data();
     long broke = 0;
-#pragma omp parallel for schedule(static) reduction(+ : broke)
+#pragma omp parallel for simd schedule(static) reduction(+ : broke)
     for (long p = 0; p < m; ++p) {
       const std::size_t u = static_cast<std::size_t>(p);
-      const V d = s.x[static_cast<std::size_t>(t.i[u])] - s.x[static_cast<std::size_t>(t.j[u])];
-      const double r2 = d.squaredNorm();
-      const PairLaw& law = laws[t.law[u]];
-      V f = V::Zero();
+      const std::size_t a = static_cast<std::size_t>(pi[u]) * D, b = static_cast<std::size_t>(pj[u]) * D;
+      // Written out per dimension (no inner loops) so the compiler vectorizes across pairs.
+      const double d0 = x[a] - x[b], d1 = x[a + 1] - x[b + 1];
+      const double d2 = D == 3 ? x[a + D - 1] - x[b + D - 1] : 0.0;
+      const double r2 = d0 * d0 + d1 * d1 + d2 * d2;
+      bool act;
       if constexpr (mode == Mode::bond) {
-        if (alive[u]) {
-          if (r2 > cut2) {  // broken for good the first time it exceeds D
-            alive[u] = 0;
-            ++broke;
-            phi_break[u] = law_potential(law, std::sqrt(r2), r_min);
-          } else {
-            f = law_force<D>(law, d, 1.0 / std::sqrt(r2), inv_rmin);
-          }
-        }
+        const bool live = alive[u] != 0, within = r2 <= cut2;
+        act = live & within;  // a bond is broken for good the first time it exceeds D
+        broke += live & !within;
       } else if constexpr (mode == Mode::cutoff) {
-        if (r2 <= cut2) f = law_force<D>(law, d, 1.0 / std::sqrt(r2), inv_rmin);
+        act = r2 <= cut2;
       } else {
-        const double rc = reach[t.law[u]];
-        if (r2 < rc * rc) f = law_force<D>(law, d, 1.0 / std::sqrt(r2), inv_rmin);
+        act = r2 < law.contact2(u);  // contact: the repulsive branch, r < r0
       }
-      t.force[u] = f;
+      const double inv = 1.0 / std::sqrt(r2);
+      const double ie = std::min(inv, inv_rmin);  // force held constant inside r_min (Sec. 4.2)
+      const double mag = law.magnitude(u, ie) * inv;  // > 0 repulsive
+      const double fr = act ? mag : 0.0;
+      out[u * D] = fr * d0;
+      out[u * D + 1] = fr * d1;
+      if constexpr (D == 3) out[u * D + D - 1] = fr * d2;
+    }
+    if constexpr (mode == Mode::bond) {
+      if (broke > 0) retire_broken(s);
     }
     return broke;
+  }
+
+  void retire_broken(const State<D>& s) {
+    const double cut2 = cutoff_ * cutoff_;
+    for (std::size_t b = 0; b < bonds_.size(); ++b) {
+      if (!alive_[b]) continue;
+      const double r2 = (s.x[static_cast<std::size_t>(bonds_.i[b])] - s.x[static_cast<std::size_t>(bonds_.j[b])]).squaredNorm();
+      if (!(r2 <= cut2)) {
+        alive_[b] = 0;
+        phi_break_[b] = law_potential(laws_[static_cast<std::size_t>(bonds_.law[b])], std::sqrt(r2), r_min_);
+      }
+    }
   }
 
   // Verlet list of pairs within reach + skin. Bonded: excludes intact bonds (they act through the bond list).
