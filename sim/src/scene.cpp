@@ -273,8 +273,9 @@ BodySpec read_body(Tab t, int dim, std::size_t index) {
   }
   for (Tab s : t.tables("slits")) {
     Segment seg;
-    seg.from = s.vector("from", dim);
-    seg.to = s.vector("to", dim);
+    // A slit is a segment in the xy plane; in 3-D it cuts through the whole thickness, so [x, y] suffices.
+    seg.from = s.vector("from", 2);
+    seg.to = s.vector("to", 2);
     if ((seg.to - seg.from).norm() <= 0.0) s.fail_at(s.get("to"), "to", "a slit needs two distinct ends");
     s.done();
     b.slits.push_back(seg);

@@ -1,0 +1,154 @@
+// Scenes: the shipped cases read, build and run; errors name file, line and key.
+#include "pmfrag/run.hpp"
+#include "pmfrag/system.hpp"
+#include "test_helpers.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <set>
+
+using namespace pmfrag;
+
+namespace {
+std::string error_of(const std::string& text, const std::vector<std::string>& overrides = {}) {
+  try {
+    parse_scene(text, "bad.toml", overrides);
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+const char* minimal = R"(
+[[body]]
+lattice = "triangular"
+shape = { kind = "rect", min = [0, 0], max = [2, 2] }
+[[phase]]
+p = 7
+q = 14
+[pair]
+[time]
+dt = 1e-7
+end = 1e-6
+)";
+}  // namespace
+
+TEST(Scene, GreenspanPlateHasThePapersSitesAndSlit) {
+  const Scene sc = read_scene(test::case_path("slit_plate_7_14.toml"));
+  const System sys = build_system(sc);
+  EXPECT_EQ(sys.size(), 2698u);  // 2713 sites minus 15 voids
+  // The voids i = 1070 + 41k are absent, everything else present.
+  std::set<int> sites(sys.site.begin(), sys.site.end());
+  for (int k = 0; k < 15; ++k) EXPECT_EQ(sites.count(1070 + 41 * k), 0u);
+  EXPECT_EQ(sites.count(1069), 1u);
+  EXPECT_EQ(*sites.rbegin(), 2713);
+  // Every bond has length r0 (to the 8 digits of the paper's coordinates).
+  for (const auto& b : sys.bonds) EXPECT_NEAR((sys.position[b[0]] - sys.position[b[1]]).norm(), 0.2, 1e-7);
+  // Interior sites have 6 neighbours: count the coordination histogram's maximum.
+  std::vector<int> nb(sys.size());
+  for (const auto& b : sys.bonds) ++nb[b[0]], ++nb[b[1]];
+  EXPECT_EQ(*std::max_element(nb.begin(), nb.end()), 6);
+  EXPECT_EQ(select_particles(sys, Selection{Selection::Kind::top_row, {}, {}}, "t").size(), 40u);  // row 67: 40 sites
+  EXPECT_EQ(select_particles(sys, Selection{Selection::Kind::bottom_row, {}, {}}, "t").size(), 40u);
+}
+
+TEST(Scene, CloseBlockCountsAndNeighbours) {
+  for (const char* stacking : {"fcc", "hcp"}) {
+    const Scene sc = read_scene(test::case_path("block3d_slit.toml"), {std::string("body.0.lattice=\"") + stacking + "\"",
+                                                                      "body.0.slits=[]"});
+    const System sys = build_system(sc);
+    EXPECT_EQ(sys.size(), 54940u) << stacking;
+    std::vector<int> nb(sys.size());
+    for (const auto& b : sys.bonds) {
+      EXPECT_NEAR((sys.position[b[0]] - sys.position[b[1]]).norm(), 0.2, 1e-9);
+      ++nb[b[0]], ++nb[b[1]];
+    }
+    EXPECT_EQ(*std::max_element(nb.begin(), nb.end()), 12) << stacking;  // close packing
+  }
+}
+
+TEST(Scene, SlitRemovesCrossingBondsOnly) {
+  const std::string text = std::string(minimal) + "";
+  Scene sc = parse_scene(text, "t.toml");
+  const std::size_t intact = build_system(sc).bonds.size();
+  sc.bodies[0].slits.push_back(Segment{Vec3(1.05, -1, 0), Vec3(1.05, 0.9, 0)});
+  const System cut = build_system(sc);
+  EXPECT_LT(cut.bonds.size(), intact);
+  for (const auto& b : cut.bonds) EXPECT_FALSE(sc.bodies[0].slits[0].crossed_by(cut.position[b[0]], cut.position[b[1]]));
+}
+
+TEST(Scene, EveryShippedCaseRunsAFewSteps) {
+  const auto out = test::temp_dir("cases");
+  int count = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(std::string(PMFRAG_SOURCE_DIR) + "/cases")) {
+    if (entry.path().extension() != ".toml") continue;
+    Scene sc = read_scene(entry.path().string());
+    const System sys = build_system(sc);
+    const double dt = sc.time.auto_dt ? sc.time.safety * system_dt_limit(sys) : sc.time.dt;
+    sc.time.end = 5 * dt;
+    sc.output.every = dt;
+    RunOptions ro;
+    ro.out_dir = (out / entry.path().stem()).string();
+    const RunResult r = run_scene(sc, ro);
+    EXPECT_TRUE(r.completed) << entry.path() << ": " << r.message;
+    EXPECT_EQ(r.frames, 6) << entry.path();
+    EXPECT_TRUE(std::filesystem::exists(ro.out_dir + "/trajectory.h5"));
+    ++count;
+  }
+  EXPECT_GE(count, 6);
+  std::filesystem::remove_all(out);
+}
+
+TEST(Scene, ErrorsNameFileLineAndKey) {
+  // minimal's lines: 2 [[body]], 3 lattice, 4 shape, 5 [[phase]], 6 p, 7 q, 8 [pair], 9 [time], 10 dt, 11 end
+  const std::string m = minimal;
+  auto with = [&](const std::string& from, const std::string& to) {
+    std::string t = m;
+    t.replace(t.find(from), from.size(), to);
+    return t;
+  };
+  EXPECT_EQ(error_of(m), "");
+  EXPECT_EQ(error_of(m + "frobnicate = 1\n"), "bad.toml:12: key 'time.frobnicate': unknown key");
+  EXPECT_EQ(error_of("frobnicate = 1" + m), "bad.toml:1: key 'frobnicate': unknown key");
+  EXPECT_EQ(error_of(with("dt = 1e-7", "dt = \"fast\"")), "bad.toml:10: key 'time.dt': expected a step in seconds or \"auto\"");
+  EXPECT_EQ(error_of(with("dt = 1e-7", "dt = -1e-7")), "bad.toml:10: key 'time.dt': must be positive (got -0.000000)");
+  EXPECT_EQ(error_of(with("dt = 1e-7", "dt = nan")), "bad.toml:10: key 'time.dt': must be finite (got nan)");
+  EXPECT_EQ(error_of(with("end = 1e-6\n", "")), "bad.toml:9: key 'time.end': missing (required)");
+  EXPECT_EQ(error_of(with("q = 14", "q = 7")), "bad.toml:7: key 'phase[0].q': q must be greater than p (got p = 7, q = 7)");
+  EXPECT_EQ(error_of(with("p = 7", "p = 0")), "bad.toml:6: key 'phase[0].p': p must be >= 1 (got 0)");
+  EXPECT_EQ(error_of(with("lattice = \"triangular\"", "lattice = \"square\"")),
+            "bad.toml:3: key 'body[0].lattice': unknown lattice 'square' (greenspan_plate, triangular, hcp, fcc)");
+  EXPECT_EQ(error_of(with("[pair]", "[pair]\nmodel = \"springs\"")),
+            "bad.toml:9: key 'pair.model': expected \"bonded\" or \"cutoff\" (got \"springs\")");
+  EXPECT_EQ(error_of(with("q = 14", "q = 14\nmass = 0.05")), "bad.toml:5: key 'phase[0].G': missing (required)");
+  EXPECT_EQ(error_of(m, {"time.frob=3"}), "bad.toml (--set): key 'time.frob': unknown key");
+  EXPECT_EQ(error_of(m, {"time.end=-1"}), "bad.toml (--set): key 'time.end': must be positive (got -1.000000)");
+  EXPECT_EQ(error_of(m, {"time.end=2e-6"}), "");
+  EXPECT_NE(error_of("[[body]\nx=1"), "");  // TOML syntax: line reported
+  EXPECT_EQ(error_of("[[body]\nx=1").rfind("bad.toml:1:", 0), 0u);
+  // r0 must be positive
+  EXPECT_EQ(error_of(with("lattice = \"triangular\"", "lattice = \"triangular\"\nr0 = -0.2")),
+            "bad.toml:4: key 'body[0].r0': must be positive (got -0.200000)");
+}
+
+TEST(Scene, SelectionsAndRegionsThatSelectNothingAreRefused) {
+  const std::string m = minimal;
+  Scene sc = parse_scene(m + "[[kinematic]]\nselect = { region = { kind = \"disc\", center = [50, 50], radius = 1 } }\n"
+                             "velocity = [0, 1]\n",
+                         "k.toml");
+  try {
+    (void)run_scene(sc, RunOptions{test::temp_dir("nothing").string(), false, false, {}, {}});
+    FAIL() << "expected an error";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("kinematic[0].select"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("selects no particle"), std::string::npos) << e.what();
+  }
+  Scene holes = parse_scene(m, "h.toml");
+  Region everything;
+  everything.kind = Region::Kind::disc;
+  everything.center = Vec3(1, 1, 0);
+  everything.radius = 10.0;
+  holes.bodies[0].holes.push_back(everything);
+  EXPECT_THROW(build_system(holes), SceneError);
+}
