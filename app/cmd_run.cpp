@@ -15,7 +15,7 @@ namespace pmfrag::app {
 namespace {
 
 struct RunCli {
-  std::string scene, out;
+  std::string scene, out, resume;
   std::vector<std::string> set;
   bool allow_unstable = false, force = false, quiet = false;
   int threads = 0;
@@ -32,9 +32,12 @@ std::string clock_text(double s) {
 
 void run(const RunCli& o) {
   if (o.threads > 0) omp_set_num_threads(o.threads);
-  const Scene scene = read_scene(o.scene, o.set);
+  if (o.resume.empty() && (o.scene.empty() || o.out.empty()))
+    throw UsageError("run: give SCENE and --out DIR, or --resume DIR");
+  if (!o.resume.empty() && !o.scene.empty()) throw UsageError("--resume: takes the run folder only, not a scene");
   RunOptions ro;
-  ro.out_dir = o.out;
+  ro.out_dir = o.resume.empty() ? o.out : o.resume;
+  ro.overrides = o.set;
   ro.allow_unstable = o.allow_unstable;
   ro.force = o.force;
   if (!o.quiet) ro.log = [](const std::string& line) { std::fprintf(stderr, "pmfrag: %s\n", line.c_str()); };
@@ -55,8 +58,12 @@ void run(const RunCli& o) {
                      100.0 * p.time / p.end, p.steps_per_s, clock_text(p.eta_s).c_str());
       }
     };
-  const RunResult r = run_scene(scene, ro);
+  const RunResult r = o.resume.empty() ? run_scene(read_scene(o.scene, o.set), ro) : resume_run(ro);
   if (!o.quiet && tty) std::fprintf(stderr, "\n");
+  if (r.completed && r.steps == 0 && !r.message.empty()) {
+    std::printf("%s\n", r.message.c_str());
+    return;
+  }
   std::printf("%s: %ld steps, %ld frames, %zu particles in %.3g s (%.3g particle-steps/s, %d threads)\n",
               r.completed ? "finished" : "STOPPED", r.steps, r.frames, r.particles, r.wall_s, r.particle_steps_per_s(),
               omp_get_max_threads());
@@ -64,7 +71,7 @@ void run(const RunCli& o) {
     std::printf("first broken bond at t = %.6e s\n", r.first_break_time);
   else
     std::printf("no bond broke\n");
-  std::printf("trajectory: %s/trajectory.h5\n", o.out.c_str());
+  std::printf("trajectory: %s/trajectory.h5\n", ro.out_dir.c_str());
   if (!r.completed) throw std::runtime_error(r.message + " (frames written so far are kept)");
 }
 
@@ -73,8 +80,11 @@ void run(const RunCli& o) {
 void add_run_command(CLI::App& app) {
   auto o = std::make_shared<RunCli>();
   auto* cmd = app.add_subcommand("run", "Simulate a scene (cases/*.toml) and write OUT/trajectory.h5 (H5MD)");
-  cmd->add_option("scene", o->scene, "Scene file (TOML)")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--out,-o", o->out, "Output folder")->required();
+  cmd->add_option("scene", o->scene, "Scene file (TOML)")->check(CLI::ExistingFile);
+  cmd->add_option("--out,-o", o->out, "Output folder (trajectory.h5, checkpoint.h5, run.json)");
+  cmd->add_option("--resume", o->resume,
+                  "Continue the run in this folder from its last checkpoint (bitwise as if never stopped)")
+      ->type_name("DIR");
   cmd->add_option("--set", o->set, "Override a scene key, e.g. --set time.end=2e-3 (repeatable)")->type_name("KEY=VALUE");
   cmd->add_flag("--allow-unstable", o->allow_unstable, "Run even if dt exceeds the Eq. 15 stability limit");
   cmd->add_flag("--force", o->force, "Overwrite an existing trajectory in the output folder");

@@ -138,7 +138,9 @@ TEST(Scene, SelectionsAndRegionsThatSelectNothingAreRefused) {
                              "velocity = [0, 1]\n",
                          "k.toml");
   try {
-    (void)run_scene(sc, RunOptions{test::temp_dir("nothing").string(), false, false, {}, {}});
+    RunOptions ro;
+    ro.out_dir = test::temp_dir("nothing").string();
+    (void)run_scene(sc, ro);
     FAIL() << "expected an error";
   } catch (const SceneError& e) {
     EXPECT_NE(std::string(e.what()).find("kinematic[0].select"), std::string::npos) << e.what();

@@ -16,9 +16,10 @@ Eigen::Matrix<double, D, 1> head(const Vec3& v) {
 }
 
 /// Kinematic boundary (Sec. 4.2): selected particles move at a prescribed velocity whatever the forces.
-/// Tallies the work the boundary does: its force on particle i is -f_i, so dW/dt = g = -sum f_i . u. The sum
-/// over steps uses the trapezoid rule (the left-point sum plus an end correction at output), which is what
-/// leapfrog's second-order energy balance needs.
+/// They get velocity u and zero inverse mass, so leapfrog keeps them at u (like LAMMPS' velocity set + fix
+/// setforce). The work the boundary does: its force on particle i is -f_i, so dW/dt = g = -sum f_i . u; the
+/// sum over steps uses the trapezoid rule, which is what leapfrog's second-order energy balance needs.
+/// Runs last among the force effects, so f_i is the complete force.
 template <int D>
 class Kinematic final : public Effect<D> {
  public:
@@ -27,21 +28,29 @@ class Kinematic final : public Effect<D> {
       : u_(head<D>(spec.velocity)),
         index_(select_particles(sys, spec.select, "kinematic[" + std::to_string(index) + "].select")) {}
   std::string name() const override { return "kinematic"; }
-  unsigned stages() const override { return stage::setup | stage::constrain | stage::frame | stage::observe; }
+  unsigned stages() const override { return stage::setup | stage::force | stage::observe; }
   void setup(State<D>& s) override {
-    for (int i : index_) s.v[static_cast<std::size_t>(i)] = u_;
+    for (int i : index_) s.v[static_cast<std::size_t>(i)] = u_, s.inv_mass[static_cast<std::size_t>(i)] = 0.0;
   }
-  void constrain(State<D>& s) override {
+  void add_forces(State<D>& s) override {
+    if (s.step == tallied_step_) return;  // forces re-evaluated at the same step (checkpoint): count once
     const double g = power(s);
-    if (s.step == 0) g0_ = g;
-    left_sum_ += g * s.dt;
-    for (int i : index_) s.v[static_cast<std::size_t>(i)] = u_;
-  }
-  void frame_velocity(std::vector<V>& v) const override {
-    for (int i : index_) v[static_cast<std::size_t>(i)] = u_;
+    if (tallied_step_ < 0)
+      g0_ = g;
+    else
+      left_sum_ += g_ * s.dt;
+    g_ = g;
+    tallied_step_ = s.step;
   }
   void observe(const State<D>& s, Observables& o) const override {
-    if (s.step > 0) o.boundary_work += left_sum_ + 0.5 * s.dt * (power(s) - g0_);
+    o.boundary_work += left_sum_ + 0.5 * s.dt * (g_ - g0_);
+  }
+  void save(std::vector<double>& out) const override {
+    out.insert(out.end(), {left_sum_, g0_, g_, static_cast<double>(tallied_step_)});
+  }
+  void load(const double*& in) override {
+    left_sum_ = *in++, g0_ = *in++, g_ = *in++;
+    tallied_step_ = static_cast<long>(*in++);
   }
 
  private:
@@ -52,7 +61,8 @@ class Kinematic final : public Effect<D> {
   }
   V u_;
   std::vector<int> index_;
-  double left_sum_ = 0.0, g0_ = 0.0;
+  double left_sum_ = 0.0, g0_ = 0.0, g_ = 0.0;
+  long tallied_step_ = -1;
 };
 
 template <int D>

@@ -2,6 +2,7 @@
 
 #include <hdf5.h>
 
+#include <cstdio>
 #include <stdexcept>
 
 namespace pmfrag {
@@ -77,6 +78,28 @@ struct Series {
     value = grow(group, "value", type, shape);
     string_attribute(time, "unit", "s");
   }
+  // Reopens an existing element and cuts it to `keep` frames.
+  static Series reopen(hid_t parent, const char* name, hid_t value_type, hsize_t keep) {
+    Series s;
+    s.type = value_type;
+    s.group = checked(H5Gopen2(parent, name, H5P_DEFAULT), name);
+    s.step = checked(H5Dopen2(s.group, "step", H5P_DEFAULT), "step");
+    s.time = checked(H5Dopen2(s.group, "time", H5P_DEFAULT), "time");
+    s.value = checked(H5Dopen2(s.group, "value", H5P_DEFAULT), "value");
+    hid_t space = H5Dget_space(s.value);
+    const int rank = H5Sget_simple_extent_ndims(space);
+    std::vector<hsize_t> dims(static_cast<std::size_t>(rank));
+    H5Sget_simple_extent_dims(space, dims.data(), nullptr);
+    H5Sclose(space);
+    s.shape.assign(dims.begin() + 1, dims.end());
+    for (hid_t d : {s.step, s.time, s.value}) {
+      std::vector<hsize_t> cut = dims;
+      if (d != s.value) cut.resize(1);
+      cut[0] = keep;
+      check(H5Dset_extent(d, cut.data()), "truncate");
+    }
+    return s;
+  }
   static hid_t grow(hid_t g, const char* name, hid_t t, const std::vector<hsize_t>& frame) {
     std::vector<hsize_t> dims{0}, maxd{H5S_UNLIMITED}, chunk{frame.empty() ? hsize_t(256) : hsize_t(1)};
     for (auto s : frame) dims.push_back(s), maxd.push_back(s), chunk.push_back(s);
@@ -127,7 +150,8 @@ struct H5mdWriter::Impl {
   hid_t obs_group = -1;
 };
 
-H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& scene, const RunParameters& run)
+H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& scene, const RunParameters& run,
+                       const std::vector<std::string>& overrides)
     : impl_(std::make_unique<Impl>()) {
   auto& m = *impl_;
   m.file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
@@ -196,6 +220,11 @@ H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& 
   hid_t par = make_group(m.file, "parameters");
   string_dataset(par, "scene", scene.text);
   string_dataset(par, "scene_file", scene.file);
+  {
+    std::string joined;
+    for (const auto& o : overrides) joined += o + "\n";
+    string_dataset(par, "overrides", joined);
+  }
   scalar_dataset(par, "dt", run.dt);
   scalar_dataset(par, "dt_limit", run.dt_limit);
   scalar_dataset(par, "end", run.end);
@@ -217,6 +246,22 @@ H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& 
     H5Gclose(phases);
   }
   H5Gclose(par);
+  H5Fflush(m.file, H5F_SCOPE_GLOBAL);
+}
+
+H5mdWriter::H5mdWriter(const std::string& path, long keep_frames) : impl_(std::make_unique<Impl>()) {
+  auto& m = *impl_;
+  m.file = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  if (m.file < 0) throw std::runtime_error(path + ": cannot reopen trajectory to resume");
+  const hsize_t keep = static_cast<hsize_t>(keep_frames);
+  m.particles = checked(H5Gopen2(m.file, "/particles/all", H5P_DEFAULT), "particles");
+  m.position = Series::reopen(m.particles, "position", H5T_NATIVE_DOUBLE, keep);
+  m.velocity = Series::reopen(m.particles, "velocity", H5T_NATIVE_DOUBLE, keep);
+  m.obs_group = checked(H5Gopen2(m.file, "/observables", H5P_DEFAULT), "observables");
+  for (const char* name : {"kinetic_energy", "potential_energy", "total_energy", "boundary_work", "bond_break_energy",
+                           "energy_balance", "pairs_beyond_cutoff"})
+    m.observables.emplace(name, Series::reopen(m.obs_group, name, H5T_NATIVE_DOUBLE, keep));
+  frames_ = keep_frames;
   H5Fflush(m.file, H5F_SCOPE_GLOBAL);
 }
 
@@ -339,6 +384,35 @@ std::vector<double> H5mdReader::observable(const std::string& name) const {
   return v;
 }
 double H5mdReader::parameter(const std::string& name) const { return read_all<double>(file_, "/parameters/" + name).at(0); }
+namespace {
+std::string read_string(hid_t file, const char* path) {
+  hid_t d = H5Dopen2(file, path, H5P_DEFAULT);
+  if (d < 0) throw std::runtime_error(std::string("trajectory has no ") + path);
+  hid_t type = H5Dget_type(d);
+  std::string s(H5Tget_size(type), '\0');
+  check(H5Dread(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, s.data()), path);
+  H5Tclose(type), H5Dclose(d);
+  while (!s.empty() && s.back() == '\0') s.pop_back();
+  return s;
+}
+}  // namespace
+
+std::string H5mdReader::scene_file() const { return read_string(file_, "/parameters/scene_file"); }
+std::vector<std::string> H5mdReader::overrides() const {
+  std::vector<std::string> out;
+  std::string line;
+  for (char c : read_string(file_, "/parameters/overrides")) {
+    if (c == '\n') {
+      if (!line.empty()) out.push_back(line);
+      line.clear();
+    } else {
+      line += c;
+    }
+  }
+  if (!line.empty()) out.push_back(line);
+  return out;
+}
+
 std::string H5mdReader::scene_text() const {
   hid_t d = H5Dopen2(file_, "/parameters/scene", H5P_DEFAULT);
   hid_t type = H5Dget_type(d);
@@ -346,6 +420,38 @@ std::string H5mdReader::scene_text() const {
   check(H5Dread(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, s.data()), "scene");
   H5Tclose(type), H5Dclose(d);
   return s;
+}
+
+void write_checkpoint(const std::string& path, const Checkpoint& c) {
+  const std::string tmp = path + ".tmp";
+  hid_t f = H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  if (f < 0) throw std::runtime_error(tmp + ": cannot write checkpoint");
+  array_dataset<long>(f, "step", {c.step}, {});
+  array_dataset<long>(f, "frames", {c.frames}, {});
+  array_dataset(f, "position", c.position, {c.position.size()});
+  array_dataset(f, "velocity", c.velocity, {c.velocity.size()});
+  array_dataset(f, "effects", c.effects, {c.effects.size()});
+  H5Fclose(f);
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw std::runtime_error(path + ": cannot rename checkpoint");
+}
+
+Checkpoint read_checkpoint(const std::string& path) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (f < 0) throw std::runtime_error(path + ": cannot open checkpoint");
+  Checkpoint c;
+  try {
+    c.step = read_all<long>(f, "step").at(0);
+    c.frames = read_all<long>(f, "frames").at(0);
+    c.position = read_all<double>(f, "position");
+    c.velocity = read_all<double>(f, "velocity");
+    c.effects = read_all<double>(f, "effects");
+  } catch (...) {
+    H5Fclose(f);
+    throw;
+  }
+  H5Fclose(f);
+  return c;
 }
 
 }  // namespace pmfrag

@@ -25,9 +25,7 @@ Leapfrog<D>::Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>>
   for (auto& e : effects_) {
     const unsigned st = e->stages();
     if (st & stage::force) force_.push_back(e.get());
-    if (st & stage::constrain) constrain_.push_back(e.get());
     if (st & stage::after_move) after_move_.push_back(e.get());
-    if (st & stage::frame) frame_.push_back(e.get());
     if (st & stage::observe) observe_.push_back(e.get());
   }
   for (auto& e : effects_)
@@ -45,23 +43,21 @@ template <int D>
 void Leapfrog<D>::step() {
   const long n = static_cast<long>(s_.size());
   const double dt = s_.dt;
-  // Eq. (12): V_1/2 = V_0 + (dt/2) a_0;  Eq. (13): V_k+1/2 = V_k-1/2 + dt a_k.
+  // Eq. (12): V_1/2 = V_0 + (dt/2) a_0;  Eq. (13): V_k+1/2 = V_k-1/2 + dt a_k;  Eq. (14): r_k+1 = r_k + dt V_k+1/2.
+  // One pass; the guard counts moves longer than r0/2 (or not finite) and the largest move feeds the
+  // neighbour lists' displacement bound.
   const double h = s_.step == 0 ? 0.5 * dt : dt;
-#pragma omp parallel for schedule(static)
+  const double limit2 = 0.25 * s_.r0 * s_.r0;
+  long bad = 0;
+  double max2 = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : bad) reduction(max : max2)
   for (long k = 0; k < n; ++k) {
     const std::size_t i = static_cast<std::size_t>(k);
     s_.v[i] += (h * s_.inv_mass[i]) * s_.f[i];
-  }
-  for (auto* e : constrain_) e->constrain(s_);
-
-  // Eq. (14): r_k+1 = r_k + dt V_k+1/2, guarded.
-  const double limit2 = 0.25 * s_.r0 * s_.r0;
-  long bad = 0;
-#pragma omp parallel for schedule(static) reduction(+ : bad)
-  for (long k = 0; k < n; ++k) {
-    const std::size_t i = static_cast<std::size_t>(k);
     const V dx = dt * s_.v[i];
-    if (!(dx.squaredNorm() <= limit2)) ++bad;  // also catches NaN
+    const double d2 = dx.squaredNorm();
+    bad += !(d2 <= limit2);  // also catches NaN
+    max2 = std::max(max2, d2);
     s_.x[i] += dx;
   }
   if (bad > 0) {
@@ -81,7 +77,8 @@ void Leapfrog<D>::step() {
     }
   }
   ++s_.step;
-  for (auto* e : after_move_) e->after_move(s_, 0.0);
+  const double max_step = std::sqrt(max2);
+  for (auto* e : after_move_) e->after_move(s_, max_step);
   compute_forces();
 }
 
@@ -91,7 +88,6 @@ void Leapfrog<D>::whole_step_velocity(std::vector<V>& out) const {
   out.resize(n);
   const double h = s_.step == 0 ? 0.0 : 0.5 * s_.dt;
   for (std::size_t i = 0; i < n; ++i) out[i] = s_.v[i] + (h * s_.inv_mass[i]) * s_.f[i];
-  for (auto* e : frame_) e->frame_velocity(out);
 }
 
 template <int D>
@@ -110,6 +106,29 @@ template <int D>
 void Leapfrog<D>::canonicalize() {
   for (auto& e : effects_) e->canonicalize(s_);
   compute_forces();
+}
+
+template <int D>
+std::vector<double> Leapfrog<D>::effect_state() const {
+  std::vector<double> out;
+  for (const auto& e : effects_) e->save(out);
+  return out;
+}
+
+template <int D>
+void Leapfrog<D>::restore(long step, const std::vector<double>& x, const std::vector<double>& v,
+                          const std::vector<double>& effects) {
+  if (x.size() != s_.size() * D || v.size() != x.size())
+    throw std::runtime_error("checkpoint does not match the scene (particle count or dimension)");
+  s_.step = step;
+  for (std::size_t i = 0; i < s_.size(); ++i)
+    for (int d = 0; d < D; ++d) s_.x[i][d] = x[i * D + d], s_.v[i][d] = v[i * D + d];
+  std::vector<double> probe;
+  for (const auto& e : effects_) e->save(probe);
+  if (probe.size() != effects.size()) throw std::runtime_error("checkpoint does not match the scene (effects)");
+  const double* in = effects.data();
+  for (auto& e : effects_) e->load(in);
+  canonicalize();
 }
 
 template class Leapfrog<2>;

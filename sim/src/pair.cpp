@@ -20,14 +20,14 @@ template <int D>
 struct PairTable {
   using V = Eigen::Matrix<double, D, 1>;
   std::vector<int> i, j, law;
-  std::vector<V> force;  ///< force on i (j gets the opposite)
+  std::vector<double> force[D];  ///< components of the force on i (j gets the opposite), one array each
   std::vector<int> offset, entry;  ///< CSR: entry = pair << 1 | (particle is j)
 
   std::size_t size() const { return i.size(); }
   void clear() { i.clear(), j.clear(), law.clear(); }
   void add(int a, int b, int l) { i.push_back(a), j.push_back(b), law.push_back(l); }
   void index(std::size_t n) {
-    force.assign(size(), V::Zero());
+    for (auto& c : force) c.assign(size(), 0.0);
     offset.assign(n + 1, 0);
     for (std::size_t p = 0; p < size(); ++p) ++offset[static_cast<std::size_t>(i[p]) + 1], ++offset[static_cast<std::size_t>(j[p]) + 1];
     for (std::size_t k = 0; k < n; ++k) offset[k + 1] += offset[k];
@@ -45,7 +45,9 @@ struct PairTable {
       V s = V::Zero();
       for (int e = offset[static_cast<std::size_t>(k)]; e < offset[static_cast<std::size_t>(k) + 1]; ++e) {
         const int en = entry[static_cast<std::size_t>(e)];
-        s += (1.0 - 2.0 * (en & 1)) * force[static_cast<std::size_t>(en >> 1)];  // j gets -F
+        const double sign = 1.0 - 2.0 * (en & 1);  // j gets -F
+        const std::size_t p = static_cast<std::size_t>(en >> 1);
+        for (int c = 0; c < D; ++c) s[c] += sign * force[c][p];
       }
       f[static_cast<std::size_t>(k)] += s;
     }
@@ -111,15 +113,20 @@ class PairEffect final : public Effect<D> {
     }
   }
 
-  void after_move(State<D>& s, double max_displacement) override {
-    // Verlet criterion on the displacement since the list was built (tracked by the integrator's move).
-    (void)max_displacement;
-    double worst = 0.0;
-    const long n = static_cast<long>(s.size());
-#pragma omp parallel for schedule(static) reduction(max : worst)
-    for (long k = 0; k < n; ++k)
-      worst = std::max(worst, (s.x[static_cast<std::size_t>(k)] - xref_[static_cast<std::size_t>(k)]).squaredNorm());
-    if (!(worst < 0.25 * skin_ * skin_)) rebuild(s);
+  void save(std::vector<double>& out) const override {
+    out.push_back(static_cast<double>(first_break_step_));
+    for (std::size_t b = 0; b < alive_.size(); ++b) out.push_back(alive_[b]), out.push_back(phi_break_[b]);
+  }
+  void load(const double*& in) override {
+    first_break_step_ = static_cast<long>(*in++);
+    for (std::size_t b = 0; b < alive_.size(); ++b) alive_[b] = static_cast<std::uint8_t>(*in++), phi_break_[b] = *in++;
+  }
+
+  void after_move(State<D>& s, double max_step) override {
+    // Verlet criterion with a bound instead of a pass over the particles: no particle has moved more than
+    // the sum of the largest single-step moves since the build. Rebuild before two could have closed the skin.
+    moved_bound_ += max_step;
+    if (!(2.0 * moved_bound_ < skin_)) rebuild(s);
   }
 
   void observe(const State<D>& s, Observables& o) const override {
@@ -215,7 +222,9 @@ class PairEffect final : public Effect<D> {
     const int* __restrict pi = t.i.data();
     const int* __restrict pj = t.j.data();
     const double* __restrict x = s.x.front().data();
-    double* __restrict out = t.force.front().data();
+    double* __restrict f0 = t.force[0].data();
+    double* __restrict f1 = t.force[1].data();
+    double* __restrict f2 = t.force[D - 1].data();
     long broke = 0;
 #pragma omp parallel for simd schedule(static) reduction(+ : broke)
     for (long p = 0; p < m; ++p) {
@@ -239,9 +248,9 @@ class PairEffect final : public Effect<D> {
       const double ie = std::min(inv, inv_rmin);  // force held constant inside r_min (Sec. 4.2)
       const double mag = law.magnitude(u, ie) * inv;  // > 0 repulsive
       const double fr = act ? mag : 0.0;
-      out[u * D] = fr * d0;
-      out[u * D + 1] = fr * d1;
-      if constexpr (D == 3) out[u * D + D - 1] = fr * d2;
+      f0[u] = fr * d0;
+      f1[u] = fr * d1;
+      if constexpr (D == 3) f2[u] = fr * d2;
     }
     if constexpr (mode == Mode::bond) {
       if (broke > 0) retire_broken(s);
@@ -285,7 +294,7 @@ class PairEffect final : public Effect<D> {
       list_.add(static_cast<int>(a), static_cast<int>(b), law_of(static_cast<int>(a), static_cast<int>(b)));
     });
     list_.index(n);
-    xref_ = s.x;
+    moved_bound_ = 0.0;
     ++rebuilds_;
   }
 
@@ -300,7 +309,7 @@ class PairEffect final : public Effect<D> {
   std::vector<std::uint8_t> alive_;
   std::vector<double> phi_break_;
   long first_break_step_ = -1;
-  std::vector<V> xref_;
+  double moved_bound_ = 0.0;  ///< cm: bound on any particle's displacement since the last list build
   CellList<D> cells_;
   long rebuilds_ = 0;
 };

@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <memory>
 
 namespace pmfrag {
 
@@ -20,24 +22,44 @@ std::string fmt(const char* f, double v) {
 }
 
 template <int D>
-RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, double dt, double limit) {
+RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, double dt, double limit,
+                  const Checkpoint* from) {
   RunResult res;
   res.particles = sys.size();
   res.dt = dt;
   res.dt_limit = limit;
   const long steps = std::max(1L, std::lround(scene.time.end / dt));
   const long every = std::max(1L, std::lround(scene.output.every / dt));
+  const long checkpoint_every =
+      scene.output.checkpoint_every > 0 ? std::max(1L, std::lround(scene.output.checkpoint_every / dt)) : 10 * every;
   RunParameters rp{dt, limit, scene.time.end, every};
 
   namespace fs = std::filesystem;
   const fs::path dir(opt.out_dir);
   fs::create_directories(dir);
   const fs::path traj = dir / "trajectory.h5";
-  if (fs::exists(traj) && !opt.force)
-    throw std::runtime_error(traj.string() + " exists; use --force to overwrite it");
-  H5mdWriter writer(traj.string(), sys, scene, rp);
+  const fs::path ckpt = dir / "checkpoint.h5";
+  if (!from) {
+    if (fs::exists(traj) && !opt.force)
+      throw std::runtime_error(traj.string() + " exists; use --force to overwrite it or --resume to continue it");
+    fs::remove(dir / "run.json");
+    fs::remove(ckpt);
+    // The scene as read and its overrides, beside the trajectory, so --resume needs nothing else.
+    const auto mark = scene.text.find("\n# --set overrides applied:\n");
+    std::ofstream(dir / "scene.toml") << (mark == std::string::npos ? scene.text : scene.text.substr(0, mark));
+    std::ofstream ov(dir / "overrides.txt");
+    ov << "# source: " << scene.file << "\n";
+    for (const auto& o : opt.overrides) ov << o << "\n";
+  }
+  std::unique_ptr<H5mdWriter> writer_ptr = from ? std::make_unique<H5mdWriter>(traj.string(), from->frames)
+                                                : std::make_unique<H5mdWriter>(traj.string(), sys, scene, rp, opt.overrides);
+  H5mdWriter& writer = *writer_ptr;
 
   Leapfrog<D> lf(sys, make_effects<D>(sys, scene), dt);
+  if (from) {
+    lf.restore(from->step, from->position, from->velocity, from->effects);
+    if (opt.log) opt.log("resumed at step " + std::to_string(from->step) + " (t = " + fmt("%.6g", lf.state().time()) + " s)");
+  }
   if (opt.log) {
     std::string names;
     for (const auto& e : lf.effects()) names += (names.empty() ? "" : ", ") + e->name();
@@ -61,12 +83,27 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
   using clock = std::chrono::steady_clock;
   const auto t0 = clock::now();
   auto last_report = t0;
+  auto checkpoint = [&] {
+    const auto& s = lf.state();
+    Checkpoint c;
+    c.step = s.step;
+    c.frames = writer.frames();
+    for (std::size_t i = 0; i < s.size(); ++i)
+      for (int d = 0; d < D; ++d) c.position.push_back(s.x[i][d]), c.velocity.push_back(s.v[i][d]);
+    c.effects = lf.effect_state();
+    write_checkpoint(ckpt.string(), c);
+  };
   try {
-    write();
+    if (!from) write();
     while (lf.state().step < steps) {
       lf.step();
       const long k = lf.state().step;
+      // At a checkpoint step the lists are rebuilt first, in an uninterrupted run as in a resumed one, so
+      // both continue bitwise alike.
+      const bool take_checkpoint = k % checkpoint_every == 0 && k < steps;
+      if (take_checkpoint) lf.canonicalize();
       if (k % every == 0 || k == steps) write();
+      if (take_checkpoint) checkpoint();
       if (opt.progress && (k & 255) == 0) {
         const auto now = clock::now();
         if (std::chrono::duration<double>(now - last_report).count() > 0.2) {
@@ -125,8 +162,54 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
                             fmt("%.4g", limit) + " s (ratio " + fmt("%.3f", dt / limit) +
                             "); lower it, use dt = \"auto\", or pass --allow-unstable");
   if (scene.time.end < dt) throw SceneError(scene.file + ": time.end is shorter than one step");
-  if (scene.dim == 2) return run_dim<2>(scene, sys, opt, dt, limit);
-  return run_dim<3>(scene, sys, opt, dt, limit);
+  if (scene.dim == 2) return run_dim<2>(scene, sys, opt, dt, limit, nullptr);
+  return run_dim<3>(scene, sys, opt, dt, limit, nullptr);
+}
+
+RunResult resume_run(const RunOptions& opt) {
+  namespace fs = std::filesystem;
+  const fs::path dir(opt.out_dir);
+  const fs::path traj = dir / "trajectory.h5", ckpt = dir / "checkpoint.h5", info = dir / "run.json";
+  if (!fs::exists(traj)) throw std::runtime_error(traj.string() + " does not exist: nothing to resume");
+  if (fs::exists(info)) {
+    std::ifstream in(info);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (text.find("\"completed\": true") != std::string::npos) {
+      RunResult r;
+      r.completed = true;
+      r.message = "already finished: " + traj.string() + " is complete";
+      return r;
+    }
+  }
+  if (!fs::exists(dir / "scene.toml") || !fs::exists(dir / "overrides.txt"))
+    throw std::runtime_error(dir.string() + " has no scene.toml/overrides.txt: not a pmfrag run folder");
+  std::string file;
+  std::vector<std::string> overrides;
+  {
+    std::ifstream ov(dir / "overrides.txt");
+    for (std::string line; std::getline(ov, line);) {
+      if (line.rfind("# source: ", 0) == 0)
+        file = line.substr(10);
+      else if (!line.empty())
+        overrides.push_back(line);
+    }
+  }
+  std::ifstream in(dir / "scene.toml");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const Scene scene = parse_scene(text, file, overrides);
+  RunOptions o = opt;
+  o.overrides = overrides;
+  if (!fs::exists(ckpt)) {
+    if (o.log) o.log("no checkpoint in " + dir.string() + ": starting over");
+    o.force = true;
+    return run_scene(scene, o);
+  }
+  const Checkpoint c = read_checkpoint(ckpt.string());
+  const System sys = build_system(scene);
+  const double limit = system_dt_limit(sys);
+  const double dt = scene.time.auto_dt ? scene.time.safety * limit : scene.time.dt;
+  if (scene.dim == 2) return run_dim<2>(scene, sys, o, dt, limit, &c);
+  return run_dim<3>(scene, sys, o, dt, limit, &c);
 }
 
 }  // namespace pmfrag

@@ -19,7 +19,8 @@ struct State {
   std::vector<V> x;  ///< positions r_k [cm]
   std::vector<V> v;  ///< velocities: v_0 before the first step, then the half-step v_{k-1/2} [cm/s]
   std::vector<V> f;  ///< forces at r_k [dyne]
-  std::vector<double> mass, inv_mass;  ///< g, 1/g
+  std::vector<double> mass;      ///< g
+  std::vector<double> inv_mass;  ///< 1/g; 0 for particles whose motion is prescribed (kinematic)
   long step = 0;
   double dt = 0.0;  ///< s
   double r0 = 0.2;  ///< cm
@@ -39,12 +40,10 @@ struct Observables {
 };
 
 namespace stage {
-inline constexpr unsigned setup = 1u << 0;        ///< once, before the first force evaluation
-inline constexpr unsigned force = 1u << 1;        ///< add forces at r_k (in attachment order; pair first)
-inline constexpr unsigned constrain = 1u << 2;    ///< after v_{k+1/2} is computed, before the move
-inline constexpr unsigned after_move = 1u << 3;   ///< after r_{k+1} is known (neighbour lists)
-inline constexpr unsigned frame = 1u << 4;        ///< adjust the whole-step velocity written to a frame
-inline constexpr unsigned observe = 1u << 5;      ///< contribute to Observables on output steps
+inline constexpr unsigned setup = 1u << 0;       ///< once, before the first force evaluation
+inline constexpr unsigned force = 1u << 1;       ///< add forces at r_k (in attachment order; pair first)
+inline constexpr unsigned after_move = 1u << 2;  ///< after r_{k+1} is known (neighbour lists)
+inline constexpr unsigned observe = 1u << 3;     ///< contribute to Observables on output steps
 }  // namespace stage
 
 template <int D>
@@ -56,13 +55,16 @@ class Effect {
   virtual unsigned stages() const = 0;
   virtual void setup(State<D>&) {}
   virtual void add_forces(State<D>&) {}
-  virtual void constrain(State<D>&) {}
-  virtual void after_move(State<D>&, double /*max_displacement*/) {}
-  virtual void frame_velocity(std::vector<V>&) const {}
+  /// `max_step` bounds how far any particle moved in this step [cm] (a cheap bound for Verlet lists).
+  virtual void after_move(State<D>&, double /*max_step*/) {}
   virtual void observe(const State<D>&, Observables&) const {}
   /// Make the next force evaluation independent of history (e.g. rebuild neighbour lists now), so a run
   /// resumed from this step is bitwise identical to one that never stopped.
   virtual void canonicalize(const State<D>&) {}
+  /// History an effect carries between steps (broken bonds, tallied work), appended as doubles for a
+  /// checkpoint, and read back in the same order.
+  virtual void save(std::vector<double>&) const {}
+  virtual void load(const double*&) {}
 };
 
 /// The effects a scene declares, in the order the integrator calls them: pair, greenspan_alpha, gravity,

@@ -23,7 +23,10 @@ struct RunParameters {
 class H5mdWriter {
  public:
   /// Creates `path` (truncating it) and writes everything time-independent.
-  H5mdWriter(const std::string& path, const System& sys, const Scene& scene, const RunParameters& run);
+  H5mdWriter(const std::string& path, const System& sys, const Scene& scene, const RunParameters& run,
+             const std::vector<std::string>& overrides = {});
+  /// Reopens an existing trajectory to append, keeping its first `keep_frames` frames (resume).
+  H5mdWriter(const std::string& path, long keep_frames);
   ~H5mdWriter();
   H5mdWriter(const H5mdWriter&) = delete;
   H5mdWriter& operator=(const H5mdWriter&) = delete;
@@ -62,6 +65,8 @@ class H5mdReader {
   std::vector<double> observable(const std::string& name) const;
   double parameter(const std::string& name) const;
   std::string scene_text() const;
+  std::string scene_file() const;
+  std::vector<std::string> overrides() const;
 
  private:
   long long file_ = -1;
@@ -69,5 +74,16 @@ class H5mdReader {
   std::size_t n_ = 0;
   long frames_ = 0;
 };
+
+/// Everything needed to continue a run bitwise: the step, r_k, v_k-1/2, the effects' history and how many
+/// frames the trajectory had at that step.
+struct Checkpoint {
+  long step = 0;
+  long frames = 0;
+  std::vector<double> position, velocity, effects;
+};
+/// Written to `path`.tmp and renamed, so a checkpoint on disk is always complete.
+void write_checkpoint(const std::string& path, const Checkpoint& c);
+Checkpoint read_checkpoint(const std::string& path);
 
 }  // namespace pmfrag

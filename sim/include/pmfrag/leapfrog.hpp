@@ -24,8 +24,8 @@ class Leapfrog {
   /// Takes the System's particles at t = 0, runs the effects' setup, and evaluates forces at r_0.
   Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>> effects, double dt);
 
-  /// One step k -> k+1: Eq. (12) at k = 0 (starter half step), Eq. (13) after; constraints; Eq. (14); then
-  /// forces at r_{k+1}, so forces are always those of the current positions between steps.
+  /// One step k -> k+1: Eq. (12) at k = 0 (starter half step), Eq. (13) after, and Eq. (14) in one pass;
+  /// then forces at r_{k+1}, so forces are always those of the current positions between steps.
   void step();
 
   /// Whole-step velocities v_k = v_{k-1/2} + (dt/2) a_k (v_0 at k = 0), as written to frames.
@@ -36,6 +36,12 @@ class Leapfrog {
   /// Make the next step independent of list history (see Effect::canonicalize); used at checkpoints.
   void canonicalize();
 
+  /// Every effect's history, for a checkpoint.
+  std::vector<double> effect_state() const;
+  /// Continue from a checkpoint: step, positions r_k, half-step velocities v_k-1/2 and effect history; lists
+  /// are rebuilt and forces evaluated exactly as canonicalize() did when the checkpoint was taken.
+  void restore(long step, const std::vector<double>& x, const std::vector<double>& v, const std::vector<double>& effects);
+
   State<D>& state() { return s_; }
   const State<D>& state() const { return s_; }
   const std::vector<std::unique_ptr<Effect<D>>>& effects() const { return effects_; }
@@ -44,7 +50,7 @@ class Leapfrog {
   void compute_forces();
   State<D> s_;
   std::vector<std::unique_ptr<Effect<D>>> effects_;
-  std::vector<Effect<D>*> force_, constrain_, after_move_, frame_, observe_;
+  std::vector<Effect<D>*> force_, after_move_, observe_;
 };
 
 }  // namespace pmfrag

@@ -6,6 +6,7 @@
 
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace pmfrag {
 
@@ -19,6 +20,7 @@ struct RunOptions {
   std::string out_dir;
   bool allow_unstable = false;  ///< run even if dt exceeds the Eq. 15 limit
   bool force = false;           ///< overwrite an existing trajectory
+  std::vector<std::string> overrides;  ///< the --set items the scene was read with (stored for --resume)
   std::function<void(const std::string&)> log;         ///< one line of information
   std::function<void(const Progress&)> progress;       ///< called every ~0.2 s of wall time
 };
@@ -39,5 +41,10 @@ struct UnstableStepError : std::runtime_error {
 };
 
 RunResult run_scene(const Scene& scene, const RunOptions& options);
+
+/// Continues the run in options.out_dir from its last checkpoint (the scene and its overrides are read from
+/// the trajectory). Killed before the first checkpoint: starts over. Already finished: says so in
+/// RunResult::message and does nothing.
+RunResult resume_run(const RunOptions& options);
 
 }  // namespace pmfrag

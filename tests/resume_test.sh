@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# SIGKILL a run at a random moment, resume it, and compare with an uninterrupted run: bitwise equal.
+set -u
+pmfrag=$1
+src=$2
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+scene="$src/cases/impact.toml"
+fail=0
+"$pmfrag" run "$scene" --out "$work/whole" -q --set time.end=6e-3 > /dev/null || exit 1
+for delay in 0.02 0.$((RANDOM % 4 + 2)); do
+  rm -rf "$work/cut"
+  timeout -s KILL "$delay" "$pmfrag" run "$scene" --out "$work/cut" -q --threads 1 --set time.end=6e-3 > /dev/null 2>&1
+  echo "killed after ${delay}s: $(ls "$work/cut" 2>/dev/null | tr '\n' ' ')"
+  if [ ! -f "$work/cut/trajectory.h5" ]; then
+    "$pmfrag" run "$scene" --out "$work/cut" -q --set time.end=6e-3 > /dev/null || { echo "FAIL: rerun"; fail=1; }
+  else
+    # the killed trajectory is readable up to its last flushed frame
+    h5ls -r "$work/cut/trajectory.h5" > /dev/null || { echo "FAIL: killed trajectory unreadable"; fail=1; }
+    "$pmfrag" run --resume "$work/cut" -q > /dev/null || { echo "FAIL: resume"; fail=1; }
+  fi
+  for obj in /particles/all/position /particles/all/velocity /observables; do
+    if ! h5diff -q "$work/whole/trajectory.h5" "$work/cut/trajectory.h5" "$obj" "$obj"; then
+      echo "FAIL: $obj differs after resume (delay $delay)"; fail=1
+    fi
+  done
+done
+out=$("$pmfrag" run --resume "$work/cut")
+echo "$out" | grep -q "already finished" || { echo "FAIL: finished run not recognised: $out"; fail=1; }
+[ $fail -eq 0 ] && echo "resume is bitwise identical"
+exit $fail
