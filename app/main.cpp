@@ -1,6 +1,7 @@
 // pmfrag: particle modeling of dynamic fracture and fragmentation. This file only wires subcommands.
 #include "cmd_material.hpp"
 #include "cmd_run.hpp"
+#include "cmd_scene.hpp"
 #include "parse.hpp"
 
 #include <CLI/CLI.hpp>
@@ -15,6 +16,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   pmfrag::app::add_material_command(app);
   pmfrag::app::add_run_command(app);
+  pmfrag::app::add_scene_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -1,0 +1,93 @@
+#include "cmd_scene.hpp"
+
+#include "pmfrag/effects.hpp"
+#include "pmfrag/system.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <stdexcept>
+
+namespace pmfrag::app {
+
+namespace {
+
+struct SceneCli {
+  std::string scene, lammps;
+  std::vector<std::string> set;
+};
+
+// LAMMPS "bond" data file: atom types 1 = free, 2 = kinematic (any [[kinematic]] selection, in order 2, 3, ...).
+void write_lammps(const std::string& path, const Scene& sc, const System& sys) {
+  std::vector<int> type(sys.size(), 1);
+  for (std::size_t k = 0; k < sc.kinematic.size(); ++k)
+    for (int i : select_particles(sys, sc.kinematic[k].select, "kinematic")) type[static_cast<std::size_t>(i)] = static_cast<int>(k) + 2;
+  Vec3 lo = sys.position.front(), hi = lo;
+  for (const auto& x : sys.position) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+  const double pad = 5.0;
+  std::ofstream f(path);
+  if (!f) throw std::runtime_error(path + ": cannot write");
+  f.precision(17);
+  f << "# pmfrag scene " << sc.file << " (" << sys.size() << " particles, " << sys.bonds.size() << " bonds)\n\n";
+  f << sys.size() << " atoms\n" << sys.bonds.size() << " bonds\n" << sc.kinematic.size() + 1 << " atom types\n1 bond types\n\n";
+  f << lo.x() - pad << " " << hi.x() + pad << " xlo xhi\n" << lo.y() - pad << " " << hi.y() + pad << " ylo yhi\n";
+  if (sys.dim == 3)
+    f << lo.z() - pad << " " << hi.z() + pad << " zlo zhi\n";
+  else
+    f << "-0.5 0.5 zlo zhi\n";
+  f << "\nMasses\n\n";
+  for (std::size_t t = 1; t <= sc.kinematic.size() + 1; ++t) f << t << " " << sys.phase_mass.front() << "\n";
+  f << "\nAtoms # bond\n\n";
+  for (std::size_t i = 0; i < sys.size(); ++i)
+    f << i + 1 << " 1 " << type[i] << " " << sys.position[i].x() << " " << sys.position[i].y() << " " << sys.position[i].z() << "\n";
+  f << "\nBonds\n\n";
+  for (std::size_t b = 0; b < sys.bonds.size(); ++b) f << b + 1 << " 1 " << sys.bonds[b][0] + 1 << " " << sys.bonds[b][1] + 1 << "\n";
+  // The law and step at full precision beside it (rounded G, H leave F(r0) != 0 and a prestressed lattice).
+  std::ofstream par(path + ".params");
+  par.precision(17);
+  const PairLaw& law = sys.laws.front();
+  const double dt = sc.time.auto_dt ? sc.time.safety * system_dt_limit(sys) : sc.time.dt;
+  par << law.p << " " << law.q << " " << law.G << " " << law.H << " " << sys.phase_mass.front() << " " << sys.r0 << " "
+      << sys.cutoff << " " << dt << " " << sys.dim << "\n";
+}
+
+void run(const SceneCli& o) {
+  const Scene sc = read_scene(o.scene, o.set);
+  const System sys = build_system(sc);
+  if (!o.lammps.empty() && sys.phase_names.size() != 1)
+    throw std::runtime_error("--lammps-data: only single-phase scenes can be written for LAMMPS");
+  std::printf("%s: %s\n", sc.file.c_str(), sc.title.c_str());
+  std::printf("dimension %d, r0 = %g cm, D = %g cm, %zu particles, %zu bonds\n", sys.dim, sys.r0, sys.cutoff, sys.size(),
+              sys.bonds.size());
+  for (std::size_t k = 0; k < sys.phase_names.size(); ++k) {
+    const PairLaw& l = sys.law(static_cast<int>(k), static_cast<int>(k));
+    std::printf("phase %-10s (p,q) = (%d,%d)  G = %.6e  H = %.6e  mass = %.6g g\n", sys.phase_names[k].c_str(), l.p, l.q,
+                l.G, l.H, sys.phase_mass[k]);
+  }
+  std::printf("Eq. 15 limit: %.4e s\n", system_dt_limit(sys));
+  std::string effects;
+  if (sys.dim == 2)
+    for (const auto& e : make_effects<2>(sys, sc)) effects += (effects.empty() ? "" : ", ") + e->name();
+  else
+    for (const auto& e : make_effects<3>(sys, sc)) effects += (effects.empty() ? "" : ", ") + e->name();
+  std::printf("effects: %s\n", effects.empty() ? "none" : effects.c_str());
+  if (!o.lammps.empty()) {
+    write_lammps(o.lammps, sc, sys);
+    std::printf("wrote LAMMPS data %s\n", o.lammps.c_str());
+  }
+}
+
+}  // namespace
+
+void add_scene_command(CLI::App& app) {
+  auto o = std::make_shared<SceneCli>();
+  auto* cmd = app.add_subcommand("scene", "Check a scene and describe what it builds (particles, bonds, laws, effects)");
+  cmd->add_option("scene", o->scene, "Scene file (TOML)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--set", o->set, "Override a scene key (repeatable)")->type_name("KEY=VALUE");
+  cmd->add_option("--lammps-data", o->lammps, "Also write the particles and bonds as a LAMMPS data file (atom_style bond)")
+      ->type_name("FILE");
+  cmd->callback([o] { run(*o); });
+}
+
+}  // namespace pmfrag::app

@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Throughput of pmfrag and LAMMPS (Debian's lmp) on the same scene, same machine, same run, side by side.
+#   bash bench/compare-lammps.sh [STEPS_2D] [STEPS_3D]
+# Scenes: the paper's slit plate (7,14), 2698 particles, under both readings (cutoff: LAMMPS mie/cut;
+# bonded: LAMMPS bond_style table + mie/cut contacts), and the 3-D block (54,940 particles, bonded).
+# Also checks that the two codes agree on the positions at the end of the 2-D runs.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+steps2d=${1:-20000}
+steps3d=${2:-1000}
+bash scripts/install-deps bench > /dev/null
+bash scripts/build > /dev/null
+pmfrag=$PWD/build/app/pmfrag
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+mpi=(mpirun --allow-run-as-root --oversubscribe -np 2)
+
+lammps_rate() {  # lammps_rate INPUT RANKS -> particle-steps/s from "Loop time of T on P procs for S steps with A atoms"
+  local input=$1 ranks=$2 line
+  if [ "$ranks" = 1 ]; then line=$(cd "$(dirname "$input")" && lmp -in "$(basename "$input")" -log none | grep "Loop time")
+  else line=$(cd "$(dirname "$input")" && "${mpi[@]}" lmp -in "$(basename "$input")" -log none | grep "Loop time"); fi
+  echo "$line" | awk '{printf "%.4g", $12 * $9 / $4}'
+}
+pmfrag_rate() {  # pmfrag_rate SCENE MODEL THREADS STEPS DT -> particle-steps/s (loop wall time, as LAMMPS' Loop time)
+  local out="$work/p_$2_$3"
+  "$pmfrag" run "$1" --out "$out" --force -q --threads "$3" --set "pair.model=\"$2\"" \
+    --set "time.end=$(awk "BEGIN{print $4 * $5}")" --set output.every=1 > /dev/null
+  sed -n 's/.*"particle_steps_per_s": *\([0-9.e+-]*\).*/\1/p' "$out/run.json" | awk '{printf "%.4g", $1}'
+}
+
+echo "machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) cores; $(date -u +%F)"
+printf "%-28s %-7s %14s %14s %8s\n" scene threads pmfrag LAMMPS ratio
+for scene in slit_plate_7_14 block3d_slit; do
+  steps=$steps2d; models="cutoff bonded"
+  if [ $scene = block3d_slit ]; then steps=$steps3d; models="bonded"; fi
+  "$pmfrag" scene "cases/$scene.toml" --lammps-data "$work/$scene.data" > /dev/null
+  python3 bench/lammps_inputs.py "$work/$scene.data" "$steps" "$work/lmp_$scene" > /dev/null
+  dt=$(awk '{print $8}' "$work/$scene.data.params")
+  for model in $models; do
+    for t in 1 2; do
+      ours=$(pmfrag_rate "cases/$scene.toml" "$model" "$t" "$steps" "$dt")
+      theirs=$(lammps_rate "$work/lmp_$scene/$model.in" "$t")
+      printf "%-28s %-7s %14s %14s %8s\n" "$scene ($model)" "$t" "$ours" "$theirs" "$(awk "BEGIN{printf \"%.1fx\", $ours / $theirs}")"
+    done
+  done
+done
+
+# Agreement: final positions of the 2-D plate after the same steps, both readings.
+for model in cutoff bonded; do
+  sed "s|^run .*|run $steps2d\nwrite_dump all custom final.dump id x y modify sort id format float %.17g|" \
+    "$work/lmp_slit_plate_7_14/$model.in" > "$work/lmp_slit_plate_7_14/check.in"
+  (cd "$work/lmp_slit_plate_7_14" && lmp -in check.in -log none -screen none)
+  "$pmfrag" run cases/slit_plate_7_14.toml --out "$work/check" --force -q --set "pair.model=\"$model\"" \
+    --set "time.end=$(awk "BEGIN{print $steps2d * 1e-7}")" --set output.every=1 > /dev/null
+  /usr/bin/python3 - "$work/check/trajectory.h5" "$work/lmp_slit_plate_7_14/final.dump" "$model" <<'PY'
+import sys, h5py, numpy as np
+x = h5py.File(sys.argv[1])["particles/all/position/value"]
+d = np.loadtxt(sys.argv[2], skiprows=9)[:, 1:3]
+print(f"{sys.argv[3]:7s}: max |pmfrag - LAMMPS| after the run = {np.abs(x[-1] - d).max():.3e} cm "
+      f"(largest displacement {np.abs(x[-1] - x[0]).max():.3e} cm)")
+PY
+done
