@@ -79,6 +79,7 @@ class PairEffect final : public Effect<D> {
     bonds_.index(sys.size());
     alive_.assign(bonds_.size(), 1);
     phi_break_.assign(bonds_.size(), 0.0);
+    build_slots(sys.size());
     contact_reach_.resize(laws_.size());
     for (std::size_t l = 0; l < laws_.size(); ++l) contact_reach_[l] = laws_[l].equilibrium_spacing();
     max_reach_ = spec_.model == PairModel::cutoff ? cutoff_ : *std::max_element(contact_reach_.begin(), contact_reach_.end());
@@ -100,9 +101,11 @@ class PairEffect final : public Effect<D> {
 
   void add_forces(State<D>& s) override {
     if (spec_.model == PairModel::bonded) {
-      const long broke = compute<Mode::bond>(s, bonds_);
-      bonds_.gather(s.f);
-      if (broke > 0 && first_break_step_ < 0) first_break_step_ = s.step;
+      const long broke = bond_forces(s);
+      if (broke > 0) {
+        retire_broken(s);
+        if (first_break_step_ < 0) first_break_step_ = s.step;
+      }
     }
     if (uses_list_ && list_.size() > 0) {
       if (spec_.model == PairModel::cutoff)
@@ -120,6 +123,8 @@ class PairEffect final : public Effect<D> {
   void load(const double*& in) override {
     first_break_step_ = static_cast<long>(*in++);
     for (std::size_t b = 0; b < alive_.size(); ++b) alive_[b] = static_cast<std::uint8_t>(*in++), phi_break_[b] = *in++;
+    for (std::size_t b = 0; b < alive_.size(); ++b)
+      slot_alive_[static_cast<std::size_t>(bond_slot_[2 * b])] = slot_alive_[static_cast<std::size_t>(bond_slot_[2 * b + 1])] = alive_[b];
   }
 
   void after_move(State<D>& s, double max_step) override {
@@ -252,19 +257,124 @@ class PairEffect final : public Effect<D> {
       f1[u] = fr * d1;
       if constexpr (D == 3) f2[u] = fr * d2;
     }
-    if constexpr (mode == Mode::bond) {
-      if (broke > 0) retire_broken(s);
+    return broke;
+  }
+
+  // Bonds as slots: particle i's bonds sit in slots k = s * n + i (s < nslot), slot-major so a vector of
+  // consecutive particles reads consecutive slots. Each bond is evaluated from both ends: twice the force
+  // evaluations, but no per-bond force array and no scatter, and each particle's sum has a fixed order.
+  // Both ends see the same r^2 (the squares of d and -d are equal), so they agree on when it breaks.
+  void build_slots(std::size_t n) {
+    std::vector<int> degree(n, 0);
+    for (std::size_t b = 0; b < bonds_.size(); ++b) ++degree[static_cast<std::size_t>(bonds_.i[b])], ++degree[static_cast<std::size_t>(bonds_.j[b])];
+    nslot_ = degree.empty() ? 0 : *std::max_element(degree.begin(), degree.end());
+    // Pad to the lattice's coordination (6 in 2-D, 12 close-packed) so the kernel's slot loop has a
+    // compile-time length and unrolls; padding slots point at the particle itself and are never alive.
+    if (nslot_ <= 6)
+      nslot_ = 6;
+    else if (nslot_ <= 12)
+      nslot_ = 12;
+    n_ = n;
+    slot_nbr_.resize(static_cast<std::size_t>(nslot_) * n);
+    for (std::size_t k = 0; k < slot_nbr_.size(); ++k) slot_nbr_[k] = static_cast<int>(k % n);  // padding: self
+    slot_alive_.assign(slot_nbr_.size(), 0);
+    for (auto& a : acc_) a.assign(n, 0.0);
+    slot_law_.assign(slot_nbr_.size(), 0);
+    bond_slot_.resize(2 * bonds_.size());
+    std::fill(degree.begin(), degree.end(), 0);
+    for (std::size_t b = 0; b < bonds_.size(); ++b) {  // bonds are sorted, so each particle's slots are too
+      const int ends[2] = {bonds_.i[b], bonds_.j[b]};
+      for (int e = 0; e < 2; ++e) {
+        const std::size_t a = static_cast<std::size_t>(ends[e]);
+        const std::size_t k = static_cast<std::size_t>(degree[a]++) * n + a;
+        slot_nbr_[k] = ends[1 - e];
+        slot_alive_[k] = 1;
+        slot_law_[k] = bonds_.law[b];
+        bond_slot_[2 * b + static_cast<std::size_t>(e)] = static_cast<long>(k);
+      }
+    }
+  }
+
+  long bond_forces(State<D>& s) {
+    if (nslot_ == 6) return bond_forces<6>(s);
+    if (nslot_ == 12) return bond_forces<12>(s);
+    return bond_forces<0>(s);
+  }
+  template <int NSLOT>
+  long bond_forces(State<D>& s) {
+    if (nphase_ == 1) {
+      const PairLaw& l = laws_.front();
+      if (l.p == 7 && l.q == 14) return slot_kernel<NSLOT>(s, FixedLaw<7, 14>{l.G, l.H, 0.0});
+      if (l.p == 5 && l.q == 10) return slot_kernel<NSLOT>(s, FixedLaw<5, 10>{l.G, l.H, 0.0});
+      if (l.p == 3 && l.q == 5) return slot_kernel<NSLOT>(s, FixedLaw<3, 5>{l.G, l.H, 0.0});
+      return slot_kernel<NSLOT>(s, OneLaw{l, 0.0});
+    }
+    return slot_kernel<NSLOT>(s, ManyLaws{laws_.data(), slot_law_.data(), contact_reach_.data()});
+  }
+
+  // One vectorizable pass per slot over all particles, accumulating into per-particle sums (slot order is
+  // fixed, so each particle's sum is the same for any thread count). Every pass uses the same static
+  // partition, so a thread only ever touches its own particles and needs no barrier between passes.
+  template <int NSLOT, class Law>
+  long slot_kernel(State<D>& s, const Law law) {
+    const long n = static_cast<long>(n_);
+    const int nslot = NSLOT > 0 ? NSLOT : nslot_;
+    const double cut2 = cutoff_ * cutoff_;
+    const double inv_rmin = inv_rmin_;
+    const double* __restrict x = s.x.front().data();
+    double* __restrict f = s.f.front().data();
+    double* __restrict ax = acc_[0].data();
+    double* __restrict ay = acc_[1].data();
+    double* __restrict az = acc_[D - 1].data();
+    long broke = 0;
+#pragma omp parallel reduction(+ : broke)
+    {
+      for (int sl = 0; sl < nslot; ++sl) {
+        const int* __restrict nbr = slot_nbr_.data() + static_cast<std::size_t>(sl) * n_;
+        const std::uint8_t* __restrict alive = slot_alive_.data() + static_cast<std::size_t>(sl) * n_;
+        const std::size_t base = static_cast<std::size_t>(sl) * n_;
+        const bool first = sl == 0;
+#pragma omp for simd schedule(static) nowait
+        for (long p = 0; p < n; ++p) {
+          const std::size_t i = static_cast<std::size_t>(p);
+          const std::size_t j = static_cast<std::size_t>(nbr[i]);
+          const double d0 = x[i * D] - x[j * D], d1 = x[i * D + 1] - x[j * D + 1];
+          const double d2 = D == 3 ? x[i * D + D - 1] - x[j * D + D - 1] : 0.0;
+          const double r2 = d0 * d0 + d1 * d1 + d2 * d2;
+          const bool live = alive[i] != 0, within = r2 <= cut2;
+          broke += live & !within;  // a bond is broken for good the first time it exceeds D
+          const double inv = 1.0 / std::sqrt(live ? r2 : cut2);  // padding slots (r = 0) stay finite
+          const double ie = std::min(inv, inv_rmin);  // force held constant inside r_min (Sec. 4.2)
+          const double mag = law.magnitude(base + i, ie) * inv;  // > 0 repulsive
+          const double fr = (live & within) ? mag : 0.0;
+          ax[i] = (first ? 0.0 : ax[i]) + fr * d0;
+          ay[i] = (first ? 0.0 : ay[i]) + fr * d1;
+          if constexpr (D == 3) az[i] = (first ? 0.0 : az[i]) + fr * d2;
+        }
+      }
+#pragma omp for simd schedule(static)
+      for (long p = 0; p < n; ++p) {
+        const std::size_t i = static_cast<std::size_t>(p);
+        f[i * D] += ax[i];
+        f[i * D + 1] += ay[i];
+        if constexpr (D == 3) f[i * D + D - 1] += az[i];
+      }
     }
     return broke;
   }
 
   void retire_broken(const State<D>& s) {
     const double cut2 = cutoff_ * cutoff_;
+    const double* x = s.x.front().data();
     for (std::size_t b = 0; b < bonds_.size(); ++b) {
       if (!alive_[b]) continue;
-      const double r2 = (s.x[static_cast<std::size_t>(bonds_.i[b])] - s.x[static_cast<std::size_t>(bonds_.j[b])]).squaredNorm();
+      const std::size_t i = static_cast<std::size_t>(bonds_.i[b]), j = static_cast<std::size_t>(bonds_.j[b]);
+      const double d0 = x[i * D] - x[j * D], d1 = x[i * D + 1] - x[j * D + 1];
+      const double d2 = D == 3 ? x[i * D + D - 1] - x[j * D + D - 1] : 0.0;
+      const double r2 = d0 * d0 + d1 * d1 + d2 * d2;  // exactly as the kernel computes it
       if (!(r2 <= cut2)) {
         alive_[b] = 0;
+        slot_alive_[static_cast<std::size_t>(bond_slot_[2 * b])] = slot_alive_[static_cast<std::size_t>(bond_slot_[2 * b + 1])] = 0;
         phi_break_[b] = law_potential(laws_[static_cast<std::size_t>(bonds_.law[b])], std::sqrt(r2), r_min_);
       }
     }
@@ -308,6 +418,12 @@ class PairEffect final : public Effect<D> {
   PairTable<D> bonds_, list_;
   std::vector<std::uint8_t> alive_;
   std::vector<double> phi_break_;
+  std::size_t n_ = 0;
+  int nslot_ = 0;
+  std::vector<int> slot_nbr_, slot_law_;
+  std::vector<std::uint8_t> slot_alive_;
+  std::vector<long> bond_slot_;
+  std::vector<double> acc_[D];  ///< per-particle bond force sums, one array per component
   long first_break_step_ = -1;
   double moved_bound_ = 0.0;  ///< cm: bound on any particle's displacement since the last list build
   CellList<D> cells_;
