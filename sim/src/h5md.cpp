@@ -154,7 +154,10 @@ H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& 
                        const std::vector<std::string>& overrides)
     : impl_(std::make_unique<Impl>()) {
   auto& m = *impl_;
-  m.file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  // Created under a temporary name and renamed once its metadata is on disk: a trajectory.h5 that exists
+  // is always readable, even if the run is killed at once.
+  const std::string part = path + ".part";
+  m.file = H5Fcreate(part.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
   if (m.file < 0) throw std::runtime_error(path + ": cannot create trajectory file");
   const hsize_t n = sys.size(), dim = static_cast<hsize_t>(sys.dim);
 
@@ -246,7 +249,8 @@ H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& 
     H5Gclose(phases);
   }
   H5Gclose(par);
-  H5Fflush(m.file, H5F_SCOPE_GLOBAL);
+  check(H5Fflush(m.file, H5F_SCOPE_GLOBAL), "flush");
+  if (std::rename(part.c_str(), path.c_str()) != 0) throw std::runtime_error(path + ": cannot rename from " + part);
 }
 
 H5mdWriter::H5mdWriter(const std::string& path, long keep_frames) : impl_(std::make_unique<Impl>()) {

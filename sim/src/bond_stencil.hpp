@@ -1,0 +1,174 @@
+// Bond forces on a lattice, evaluated as stencil sweeps. Particles of a lattice body are numbered row by
+// row, so most bonds (i, j) share one of a few index offsets o = j - i (Greenspan's plate: 1, 40, 41). For
+// each common offset, one contiguous, vectorized sweep over i evaluates every bond (i, i + o) once and
+// stores its force at F[o + i] in an array padded with o zeros at each end; particle i then receives
+// F[o + i] - F[i] from that offset: no gathers, no scatters, each bond evaluated once. Bonds off the
+// common offsets (around holes and slits, between bodies) go through a pair table and a gather.
+// Every particle's sum has a fixed order, so forces are bitwise the same for any thread count.
+#pragma once
+
+#include "pair_kernels.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+namespace pmfrag::detail {
+
+template <int D>
+class BondStencil {
+ public:
+  BondStencil() = default;
+  /// bonds (i < j) with their law index; n particles.
+  BondStencil(std::size_t n, const std::vector<int>& bi, const std::vector<int>& bj, const std::vector<int>& blaw) {
+    n_ = n;
+    std::map<int, std::size_t> count;
+    for (std::size_t b = 0; b < bi.size(); ++b) ++count[bj[b] - bi[b]];
+    std::map<int, int> group_of;
+    for (auto [o, c] : count) {
+      // A sweep costs n - o evaluations: worth it when at least 40 % of them are bonds.
+      if (static_cast<std::size_t>(o) < n && c >= 8 && static_cast<double>(c) >= 0.4 * static_cast<double>(n - o)) {
+        group_of[o] = static_cast<int>(groups_.size());
+        Group g;
+        g.offset = o;
+        g.alive.assign(n - o, 0);
+        g.law.assign(n - o, 0);
+        for (auto& f : g.F) f.assign(n + o, 0.0);
+        groups_.push_back(std::move(g));
+      }
+    }
+    loc_.resize(bi.size());
+    for (std::size_t b = 0; b < bi.size(); ++b) {
+      const int o = bj[b] - bi[b];
+      auto it = group_of.find(o);
+      if (it != group_of.end()) {
+        Group& g = groups_[static_cast<std::size_t>(it->second)];
+        g.alive[static_cast<std::size_t>(bi[b])] = 1;
+        g.law[static_cast<std::size_t>(bi[b])] = blaw[b];
+        loc_[b] = {it->second, bi[b]};
+      } else {
+        loc_[b] = {-1, static_cast<int>(sparse_.size())};
+        sparse_.add(bi[b], bj[b], blaw[b]);
+        sparse_alive_.push_back(1);
+      }
+    }
+    sparse_.index(n);
+    for (auto& c : xs_) c.assign(n, 0.0);
+  }
+
+  void set_alive(std::size_t bond, bool alive) {
+    const auto [g, k] = loc_[bond];
+    if (g >= 0)
+      groups_[static_cast<std::size_t>(g)].alive[static_cast<std::size_t>(k)] = alive;
+    else
+      sparse_alive_[static_cast<std::size_t>(k)] = alive;
+  }
+
+  std::size_t sweeps() const { return groups_.size(); }
+  std::size_t sparse_bonds() const { return sparse_.size(); }
+
+  /// Adds bond forces to f (N x D, interleaved). Returns the number of intact bonds found longer than
+  /// sqrt(cut2): the caller retires them.
+  template <class Law>
+  long add_forces(const double* x, double* f, const Law& law, double cut2, double inv_rmin) {
+    const long n = static_cast<long>(n_);
+    long broke = 0;  // shared: the sweeps reduce into it
+#pragma omp parallel
+    {
+#pragma omp for schedule(static)
+      for (long p = 0; p < n; ++p)
+        for (int c = 0; c < D; ++c) xs_[c][static_cast<std::size_t>(p)] = x[static_cast<std::size_t>(p) * D + c];
+      for (auto& g : groups_) sweep(g, law.with_ids(g.law.data()), cut2, inv_rmin, broke);
+      if (sparse_.size() > 0) sparse_pass(law.with_ids(sparse_.law.data()), cut2, inv_rmin, broke);
+#pragma omp barrier
+      // Assembly: f_i += F[o + i] - F[i] for each offset, in a fixed order (the same static partition of
+      // particles for every loop, so no barrier is needed between them).
+      for (const Group& g : groups_) {
+        const std::size_t o = static_cast<std::size_t>(g.offset);
+        const double* __restrict F0 = g.F[0].data();
+        const double* __restrict F1 = g.F[1].data();
+        const double* __restrict F2 = g.F[D - 1].data();
+#pragma omp for simd schedule(static) nowait
+        for (long p = 0; p < n; ++p) {
+          const std::size_t i = static_cast<std::size_t>(p);
+          f[i * D] += F0[o + i] - F0[i];
+          f[i * D + 1] += F1[o + i] - F1[i];
+          if constexpr (D == 3) f[i * D + D - 1] += F2[o + i] - F2[i];
+        }
+      }
+#pragma omp barrier
+      if (sparse_.size() > 0) sparse_.gather(f);
+    }
+    return broke;
+  }
+
+ private:
+  struct Group {
+    int offset = 0;
+    std::vector<std::uint8_t> alive;  ///< bond (i, i + offset) exists and is intact
+    std::vector<int> law;
+    std::vector<double> F[D];  ///< force on i of bond (i, i + offset) at F[offset + i]; zeros at both ends
+  };
+
+  // Evaluate one offset's bonds (inside a parallel region).
+  template <class Law>
+  void sweep(Group& g, const Law law, double cut2, double inv_rmin, long& broke) {
+    const long m = static_cast<long>(n_) - g.offset;
+    const std::size_t o = static_cast<std::size_t>(g.offset);
+    const double* __restrict x0 = xs_[0].data();
+    const double* __restrict x1 = xs_[1].data();
+    const double* __restrict x2 = xs_[D - 1].data();
+    const std::uint8_t* __restrict alive = g.alive.data();
+    double* __restrict F0 = g.F[0].data() + o;
+    double* __restrict F1 = g.F[1].data() + o;
+    double* __restrict F2 = g.F[D - 1].data() + o;
+#pragma omp for simd schedule(static) nowait reduction(+ : broke)
+    for (long p = 0; p < m; ++p) {
+      const std::size_t i = static_cast<std::size_t>(p);
+      const double d0 = x0[i] - x0[i + o], d1 = x1[i] - x1[i + o];
+      const double d2 = D == 3 ? x2[i] - x2[i + o] : 0.0;
+      const double r2 = d0 * d0 + d1 * d1 + d2 * d2;
+      const bool live = alive[i] != 0, within = r2 <= cut2;
+      broke += live & !within;  // broken for good the first time it exceeds D: the caller retires it
+      const double inv = 1.0 / std::sqrt(live ? r2 : cut2);  // no bond here: keep the arithmetic finite
+      const double ie = std::min(inv, inv_rmin);  // force held constant inside r_min (Sec. 4.2)
+      const double fr = (live & within) ? law.magnitude(i, ie) * inv : 0.0;  // > 0 repulsive
+      F0[i] = fr * d0;
+      F1[i] = fr * d1;
+      if constexpr (D == 3) F2[i] = fr * d2;
+    }
+  }
+
+  template <class Law>
+  void sparse_pass(const Law law, double cut2, double inv_rmin, long& broke) {
+    const long m = static_cast<long>(sparse_.size());
+    const int* __restrict pi = sparse_.i.data();
+    const int* __restrict pj = sparse_.j.data();
+    const std::uint8_t* __restrict alive = sparse_alive_.data();
+#pragma omp for schedule(static) nowait reduction(+ : broke)
+    for (long p = 0; p < m; ++p) {
+      const std::size_t u = static_cast<std::size_t>(p);
+      const std::size_t a = static_cast<std::size_t>(pi[u]), b = static_cast<std::size_t>(pj[u]);
+      const double d0 = xs_[0][a] - xs_[0][b], d1 = xs_[1][a] - xs_[1][b];
+      const double d2 = D == 3 ? xs_[D - 1][a] - xs_[D - 1][b] : 0.0;
+      const double r2 = d0 * d0 + d1 * d1 + d2 * d2;
+      const bool live = alive[u] != 0, within = r2 <= cut2;
+      broke += live & !within;
+      const double inv = 1.0 / std::sqrt(live ? r2 : cut2);
+      const double ie = std::min(inv, inv_rmin);
+      const double fr = (live & within) ? law.magnitude(u, ie) * inv : 0.0;
+      sparse_.force[0][u] = fr * d0;
+      sparse_.force[1][u] = fr * d1;
+      if constexpr (D == 3) sparse_.force[D - 1][u] = fr * d2;
+    }
+  }
+
+  std::size_t n_ = 0;
+  std::vector<Group> groups_;
+  PairTable<D> sparse_;
+  std::vector<std::uint8_t> sparse_alive_;
+  std::vector<std::pair<int, int>> loc_;  ///< bond -> (group or -1 for sparse, index)
+  std::vector<double> xs_[D];             ///< positions by component (contiguous sweeps)
+};
+
+}  // namespace pmfrag::detail

@@ -1,0 +1,116 @@
+// Internal pieces of the pair effect: the law evaluators the loops are templated on (so the (p,q) law is
+// inlined; the paper's three laws get compile-time exponents) and a pair table with a per-particle gather.
+#pragma once
+
+#include "pmfrag/pair_law.hpp"
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <vector>
+
+namespace pmfrag::detail {
+
+template <int N>
+inline double pw(double x) {
+  if constexpr (N == 0) {
+    return 1.0;
+  } else if constexpr (N == 1) {
+    return x;
+  } else if constexpr (N % 2 == 0) {
+    const double h = pw<N / 2>(x);
+    return h * h;
+  } else {
+    return x * pw<N - 1>(x);
+  }
+}
+
+/// |F| of the law from 1/r, positive = repulsive. `with_ids` binds the per-pair law index array of a loop.
+template <int P, int Q>
+struct FixedLaw {
+  double G, H;
+  double magnitude(std::size_t, double ie) const { return -G * pw<P>(ie) + H * pw<Q>(ie); }
+  FixedLaw with_ids(const int*) const { return *this; }
+};
+struct OneLaw {
+  PairLaw law;
+  double magnitude(std::size_t, double ie) const { return -law.G * ipow(ie, law.p) + law.H * ipow(ie, law.q); }
+  OneLaw with_ids(const int*) const { return *this; }
+};
+struct ManyLaws {
+  const PairLaw* laws;
+  const int* id;
+  double magnitude(std::size_t u, double ie) const {
+    const PairLaw& l = laws[id[u]];
+    return -l.G * ipow(ie, l.p) + l.H * ipow(ie, l.q);
+  }
+  ManyLaws with_ids(const int* ids) const { return ManyLaws{laws, ids}; }
+};
+
+/// Calls fn(evaluator) with the fastest evaluator that fits: a single law (compile-time exponents for the
+/// paper's (3,5), (5,10), (7,14)) or a per-pair law lookup.
+template <class Fn>
+auto with_law(const std::vector<PairLaw>& laws, bool single, Fn&& fn) {
+  if (single) {
+    const PairLaw& l = laws.front();
+    if (l.p == 7 && l.q == 14) return fn(FixedLaw<7, 14>{l.G, l.H});
+    if (l.p == 5 && l.q == 10) return fn(FixedLaw<5, 10>{l.G, l.H});
+    if (l.p == 3 && l.q == 5) return fn(FixedLaw<3, 5>{l.G, l.H});
+    return fn(OneLaw{l});
+  }
+  return fn(ManyLaws{laws.data(), nullptr});
+}
+
+/// Potential with the r_min clamp continued linearly (phi' = -F, F constant inside r_min).
+inline double law_potential(const PairLaw& law, double r, double r_min) {
+  if (r >= r_min) return law.potential(r);
+  return law.potential(r_min) + law.force(r_min) * (r_min - r);
+}
+
+/// Pairs (i < j) with per-pair law and force, and per-particle incidence for a gather in fixed order.
+template <int D>
+struct PairTable {
+  using V = Eigen::Matrix<double, D, 1>;
+  std::vector<int> i, j, law;
+  std::vector<double> force[D];    ///< components of the force on i (j gets the opposite)
+  std::vector<int> offset, entry;  ///< CSR: entry = pair << 1 | (particle is j)
+  std::vector<int> touched;        ///< particles with at least one pair (the gather visits only these)
+
+  std::size_t size() const { return i.size(); }
+  void clear() { i.clear(), j.clear(), law.clear(); }
+  void add(int a, int b, int l) { i.push_back(a), j.push_back(b), law.push_back(l); }
+  void index(std::size_t n) {
+    for (auto& c : force) c.assign(size(), 0.0);
+    offset.assign(n + 1, 0);
+    for (std::size_t p = 0; p < size(); ++p)
+      ++offset[static_cast<std::size_t>(i[p]) + 1], ++offset[static_cast<std::size_t>(j[p]) + 1];
+    for (std::size_t k = 0; k < n; ++k) offset[k + 1] += offset[k];
+    entry.resize(static_cast<std::size_t>(offset[n]));
+    std::vector<int> fill(offset.begin(), offset.end() - 1);
+    for (std::size_t p = 0; p < size(); ++p) {  // ascending p: a fixed order per particle
+      entry[static_cast<std::size_t>(fill[static_cast<std::size_t>(i[p])]++)] = static_cast<int>(p << 1);
+      entry[static_cast<std::size_t>(fill[static_cast<std::size_t>(j[p])]++)] = static_cast<int>(p << 1 | 1);
+    }
+    touched.clear();
+    for (std::size_t k = 0; k < n; ++k)
+      if (offset[k + 1] > offset[k]) touched.push_back(static_cast<int>(k));
+  }
+  /// f_k += sum of its pairs' forces. Call from inside a parallel region (orphaned omp for).
+  void gather(double* f) const {
+    const long m = static_cast<long>(touched.size());
+#pragma omp for schedule(static)
+    for (long t = 0; t < m; ++t) {
+      const long k = touched[static_cast<std::size_t>(t)];
+      double s[D] = {};
+      for (int e = offset[static_cast<std::size_t>(k)]; e < offset[static_cast<std::size_t>(k) + 1]; ++e) {
+        const int en = entry[static_cast<std::size_t>(e)];
+        const double sign = 1.0 - 2.0 * (en & 1);  // j gets -F
+        const std::size_t p = static_cast<std::size_t>(en >> 1);
+        for (int c = 0; c < D; ++c) s[c] += sign * force[c][p];
+      }
+      for (int c = 0; c < D; ++c) f[static_cast<std::size_t>(k) * D + c] += s[c];
+    }
+  }
+};
+
+}  // namespace pmfrag::detail
