@@ -34,8 +34,8 @@ Leapfrog<D>::Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>>
 }
 
 template <int D>
-void Leapfrog<D>::compute_forces() {
-  std::fill(s_.f.begin(), s_.f.end(), V::Zero());
+void Leapfrog<D>::compute_forces(bool zeroed) {
+  if (!zeroed) std::fill(s_.f.begin(), s_.f.end(), V::Zero());
   for (auto* e : force_) e->add_forces(s_);
 }
 
@@ -59,6 +59,7 @@ void Leapfrog<D>::step() {
     bad += !(d2 <= limit2);  // also catches NaN
     max2 = std::max(max2, d2);
     s_.x[i] += dx;
+    s_.f[i].setZero();  // used; the next evaluation adds into zeros
   }
   if (bad > 0) {
     for (long k = 0; k < n; ++k) {
@@ -79,7 +80,7 @@ void Leapfrog<D>::step() {
   ++s_.step;
   const double max_step = std::sqrt(max2);
   for (auto* e : after_move_) e->after_move(s_, max_step);
-  compute_forces();
+  compute_forces(true);
 }
 
 template <int D>

@@ -47,7 +47,7 @@ class Leapfrog {
   const std::vector<std::unique_ptr<Effect<D>>>& effects() const { return effects_; }
 
  private:
-  void compute_forces();
+  void compute_forces(bool zeroed = false);
   State<D> s_;
   std::vector<std::unique_ptr<Effect<D>>> effects_;
   std::vector<Effect<D>*> force_, after_move_, observe_;
