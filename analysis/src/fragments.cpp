@@ -1,0 +1,275 @@
+#include "pmfrag/analysis/fragments.hpp"
+
+#include "pmfrag/analysis/union_find.hpp"
+#include "pmfrag/h5md.hpp"
+#include "pmfrag/pair_law.hpp"
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <stdexcept>
+
+namespace pmfrag::analysis {
+
+BreakCriterion BreakCriterion::parse(const std::string& text) {
+  BreakCriterion c;
+  if (text == "D" || text == "cutoff") return c;
+  if (text == "rd") {
+    c.kind = Kind::damage;
+    return c;
+  }
+  char* end = nullptr;
+  const double f = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end || !(f > 1.0) || !std::isfinite(f))
+    throw std::invalid_argument("--break: expected D, rd or a factor > 1 of r0 (got '" + text + "')");
+  c.kind = Kind::factor;
+  c.factor = f;
+  return c;
+}
+
+std::string BreakCriterion::describe() const {
+  switch (kind) {
+    case Kind::cutoff: return "longer than D";
+    case Kind::damage: return "longer than the damage spacing r_d";
+    case Kind::factor: {
+      char b[64];
+      std::snprintf(b, sizeof b, "longer than %g r0", factor);
+      return b;
+    }
+  }
+  return "?";
+}
+
+FragmentTracker::FragmentTracker(std::size_t particles, std::vector<std::array<int, 2>> bonds, std::vector<double> mass,
+                                 int dim, double threshold_cm)
+    : n_(particles), bonds_(std::move(bonds)), mass_(std::move(mass)), dim_(dim), threshold2_(threshold_cm * threshold_cm) {
+  broken_.assign(bonds_.size(), 0);
+}
+
+FrameLabels FragmentTracker::update(const std::vector<double>& x) {
+  const std::size_t d = static_cast<std::size_t>(dim_);
+  for (std::size_t b = 0; b < bonds_.size(); ++b) {
+    if (broken_[b]) continue;  // irreversible: a bond that re-closes stays broken
+    const std::size_t i = static_cast<std::size_t>(bonds_[b][0]) * d, j = static_cast<std::size_t>(bonds_[b][1]) * d;
+    double r2 = 0.0;
+    for (std::size_t c = 0; c < d; ++c) r2 += (x[i + c] - x[j + c]) * (x[i + c] - x[j + c]);
+    if (r2 > threshold2_) broken_[b] = 1, ++count_;
+  }
+  UnionFind uf(n_);
+  std::vector<int> degree(n_, 0), lost(n_, 0);
+  for (std::size_t b = 0; b < bonds_.size(); ++b) {
+    const auto i = static_cast<std::size_t>(bonds_[b][0]), j = static_cast<std::size_t>(bonds_[b][1]);
+    ++degree[i], ++degree[j];
+    if (broken_[b])
+      ++lost[i], ++lost[j];
+    else
+      uf.unite(i, j);
+  }
+  // Number fragments by mass, largest first (ties: lowest particle index), so ids are stable and meaningful.
+  std::map<std::size_t, std::pair<double, std::size_t>> roots;  // root -> (mass, first particle)
+  for (std::size_t i = 0; i < n_; ++i) {
+    auto& r = roots[uf.find(i)];
+    if (r.first == 0.0) r.second = i;
+    r.first += mass_[i];
+  }
+  std::vector<std::pair<std::size_t, std::pair<double, std::size_t>>> order(roots.begin(), roots.end());
+  std::sort(order.begin(), order.end(), [](const auto& a, const auto& b) {
+    return a.second.first != b.second.first ? a.second.first > b.second.first : a.second.second < b.second.second;
+  });
+  std::map<std::size_t, int> id;
+  for (std::size_t k = 0; k < order.size(); ++k) id[order[k].first] = static_cast<int>(k);
+  FrameLabels l;
+  l.fragment_id.resize(n_);
+  l.fragment_size.resize(n_);
+  l.damage.resize(n_);
+  for (std::size_t i = 0; i < n_; ++i) {
+    const std::size_t r = uf.find(i);
+    l.fragment_id[i] = id[r];
+    l.fragment_size[i] = static_cast<int>(uf.size_of(r));
+    l.damage[i] = degree[i] ? static_cast<double>(lost[i]) / degree[i] : 0.0;
+  }
+  return l;
+}
+
+namespace {
+
+std::vector<Fragment> describe_fragments(const FrameLabels& l, const TrajectoryFrame& f, const std::vector<double>& mass,
+                                         int dim) {
+  const std::size_t n = mass.size(), d = static_cast<std::size_t>(dim);
+  const int count = l.fragment_id.empty() ? 0 : *std::max_element(l.fragment_id.begin(), l.fragment_id.end()) + 1;
+  std::vector<Fragment> out(static_cast<std::size_t>(count));
+  for (std::size_t i = 0; i < n; ++i) {
+    Fragment& g = out[static_cast<std::size_t>(l.fragment_id[i])];
+    Eigen::Vector3d x = Eigen::Vector3d::Zero(), v = Eigen::Vector3d::Zero();
+    for (std::size_t c = 0; c < d; ++c) x[static_cast<Eigen::Index>(c)] = f.position[i * d + c], v[static_cast<Eigen::Index>(c)] = f.velocity[i * d + c];
+    g.particles += 1;
+    g.mass += mass[i];
+    g.center += mass[i] * x;
+    g.velocity += mass[i] * v;
+  }
+  for (auto& g : out) g.center /= g.mass, g.velocity /= g.mass;
+  std::vector<Eigen::Matrix3d> gyr(out.size(), Eigen::Matrix3d::Zero());
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t k = static_cast<std::size_t>(l.fragment_id[i]);
+    Eigen::Vector3d x = Eigen::Vector3d::Zero();
+    for (std::size_t c = 0; c < d; ++c) x[static_cast<Eigen::Index>(c)] = f.position[i * d + c];
+    const Eigen::Vector3d r = x - out[k].center;
+    gyr[k] += mass[i] * r * r.transpose();
+  }
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    out[k].id = static_cast<long>(k);
+    gyr[k] /= out[k].mass;
+    out[k].radius_of_gyration = std::sqrt(std::max(0.0, gyr[k].trace()));
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(gyr[k]);
+    const Eigen::Vector3d ev = es.eigenvalues().cwiseMax(0.0).cwiseSqrt();
+    out[k].principal = Eigen::Vector3d(ev[2], ev[1], ev[0]);
+  }
+  return out;
+}
+
+double law_threshold(const H5mdReader& rd, const BreakCriterion& c, int& p, int& q) {
+  const double r0 = rd.parameter("r0");
+  p = q = 0;
+  try {
+    p = static_cast<int>(rd.parameter("p"));
+    q = static_cast<int>(rd.parameter("q"));
+  } catch (const std::exception&) {  // several phases: no single (p,q)
+  }
+  switch (c.kind) {
+    case BreakCriterion::Kind::cutoff: return rd.parameter("cutoff");
+    case BreakCriterion::Kind::factor: return c.factor * r0;
+    case BreakCriterion::Kind::damage: {
+      if (p == 0) throw std::runtime_error("--break rd needs a single-phase trajectory (one damage spacing)");
+      return PairLaw{p, q, rd.parameter("G"), rd.parameter("H")}.damage_spacing();
+    }
+  }
+  return 0.0;
+}
+
+template <class F>
+void write_atomically(const std::filesystem::path& path, F&& body) {
+  const std::filesystem::path tmp = path.string() + ".tmp";
+  {
+    std::ofstream out(tmp);
+    if (!out) throw std::runtime_error(path.string() + ": cannot write");
+    out.precision(10);
+    body(out);
+    if (!out) throw std::runtime_error(path.string() + ": write failed");
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+}  // namespace
+
+FragmentReport analyse_fragments(const std::string& trajectory, const BreakCriterion& criterion) {
+  H5mdReader rd(trajectory);
+  FragmentReport rep;
+  rep.threshold_cm = law_threshold(rd, criterion, rep.p, rep.q);
+  rep.criterion = criterion.describe();
+  const auto mass = rd.mass();
+  for (double m : mass) rep.total_mass += m;
+  std::vector<double> ke, pe;
+  try {
+    ke = rd.observable("kinetic_energy");
+    pe = rd.observable("potential_energy");
+  } catch (const std::exception&) {
+  }
+  FragmentTracker tracker(rd.particles(), rd.bonds(), mass, rd.dim(), rep.threshold_cm);
+  FrameLabels labels;
+  TrajectoryFrame last;
+  for (long k = 0; k < rd.frames(); ++k) {
+    TrajectoryFrame f;
+    try {
+      f = rd.frame(k);
+    } catch (const std::exception& e) {
+      rep.partial = true;
+      rep.note = "frame " + std::to_string(k) + " unreadable (" + e.what() + "); analysed frames 0.." + std::to_string(k - 1);
+      break;
+    }
+    labels = tracker.update(f.position);
+    TimelineRow row;
+    row.step = f.step;
+    row.time = f.time;
+    row.broken = tracker.broken_count();
+    std::map<int, double> fm;
+    for (std::size_t i = 0; i < mass.size(); ++i) fm[labels.fragment_id[i]] += mass[i];
+    std::map<int, long> fn;
+    for (int id : labels.fragment_id) ++fn[id];
+    row.fragments = static_cast<long>(fm.size());
+    long five_pct = 0;
+    for (const auto& [id, m] : fm) {
+      row.fragments_2plus += fn[id] >= 2;
+      row.fragments_1pct += m >= 0.01 * rep.total_mass;
+      five_pct += m >= 0.05 * rep.total_mass;
+      row.largest_fraction = std::max(row.largest_fraction, m / rep.total_mass);
+    }
+    row.mean_mass = rep.total_mass / static_cast<double>(row.fragments);
+    if (static_cast<std::size_t>(k) < ke.size()) row.kinetic = ke[static_cast<std::size_t>(k)];
+    if (static_cast<std::size_t>(k) < pe.size()) row.potential = pe[static_cast<std::size_t>(k)];
+    if (rep.onset_time < 0 && row.broken > 0) rep.onset_time = row.time;
+    if (rep.separation_time < 0 && five_pct >= 2) rep.separation_time = row.time;
+    rep.timeline.push_back(row);
+    last = std::move(f);
+    ++rep.frames_read;
+  }
+  if (rep.frames_read == 0) throw std::runtime_error(trajectory + ": no readable frame");
+  rep.final_fragments = describe_fragments(labels, last, mass, rd.dim());
+  return rep;
+}
+
+void write_fragment_report(const FragmentReport& r, const std::string& dir_name) {
+  namespace fs = std::filesystem;
+  const fs::path dir(dir_name);
+  write_atomically(dir / "fragments_timeline.csv", [&](std::ostream& o) {
+    o << "time_s,step,broken_bonds,fragments,fragments_2plus,fragments_1pct_mass,largest_mass_fraction,"
+         "mean_fragment_mass_g,kinetic_energy_erg,potential_energy_erg\n";
+    for (const auto& t : r.timeline)
+      o << t.time << "," << t.step << "," << t.broken << "," << t.fragments << "," << t.fragments_2plus << ","
+        << t.fragments_1pct << "," << t.largest_fraction << "," << t.mean_mass << "," << t.kinetic << "," << t.potential
+        << "\n";
+  });
+  write_atomically(dir / "fragments_final.csv", [&](std::ostream& o) {
+    o << "id,particles,mass_g,com_x_cm,com_y_cm,com_z_cm,v_x_cm_s,v_y_cm_s,v_z_cm_s,radius_of_gyration_cm,"
+         "principal_1_cm,principal_2_cm,principal_3_cm\n";
+    for (const auto& g : r.final_fragments)
+      o << g.id << "," << g.particles << "," << g.mass << "," << g.center.x() << "," << g.center.y() << ","
+        << g.center.z() << "," << g.velocity.x() << "," << g.velocity.y() << "," << g.velocity.z() << ","
+        << g.radius_of_gyration << "," << g.principal[0] << "," << g.principal[1] << "," << g.principal[2] << "\n";
+  });
+  write_atomically(dir / "fragment_sizes.csv", [&](std::ostream& o) {
+    // Logarithmic mass bins (factor 2) from the smallest fragment up; cumulative fraction of the total mass
+    // in fragments no heavier than the bin's upper edge.
+    o << "mass_low_g,mass_high_g,fragments,cumulative_mass_fraction\n";
+    if (r.final_fragments.empty()) return;
+    double lo = r.final_fragments.back().mass;
+    for (const auto& g : r.final_fragments) lo = std::min(lo, g.mass);
+    lo *= 0.999;
+    double cumulative = 0.0;
+    for (double a = lo; a <= r.total_mass * 1.0001; a *= 2.0) {
+      long count = 0;
+      for (const auto& g : r.final_fragments)
+        if (g.mass > a && g.mass <= 2 * a) ++count, cumulative += g.mass;
+      o << a << "," << 2 * a << "," << count << "," << cumulative / r.total_mass << "\n";
+    }
+  });
+  long singles = 0, multi = 0;
+  for (const auto& g : r.final_fragments) (g.particles == 1 ? singles : multi) += 1;
+  const TimelineRow& end = r.timeline.back();
+  write_atomically(dir / "summary.json", [&](std::ostream& o) {
+    o << "{\n  \"p\": " << r.p << ",\n  \"q\": " << r.q << ",\n  \"break_criterion\": \"" << r.criterion
+      << "\",\n  \"break_length_cm\": " << r.threshold_cm << ",\n  \"frames\": " << r.frames_read
+      << ",\n  \"partial\": " << (r.partial ? "true" : "false") << ",\n  \"note\": \"" << r.note
+      << "\",\n  \"onset_time_s\": " << r.onset_time << ",\n  \"separation_time_s\": " << r.separation_time
+      << ",\n  \"final_time_s\": " << end.time << ",\n  \"broken_bonds\": " << end.broken
+      << ",\n  \"fragments\": " << end.fragments << ",\n  \"fragments_2plus\": " << multi
+      << ",\n  \"single_particles\": " << singles << ",\n  \"fragments_1pct_mass\": " << end.fragments_1pct
+      << ",\n  \"largest_mass_fraction\": " << end.largest_fraction << "\n}\n";
+  });
+}
+
+}  // namespace pmfrag::analysis

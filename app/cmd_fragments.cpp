@@ -1,0 +1,65 @@
+#include "cmd_fragments.hpp"
+
+#include "parse.hpp"
+#include "pmfrag/analysis/fragments.hpp"
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <stdexcept>
+
+namespace pmfrag::app {
+
+namespace {
+
+struct FragmentsCli {
+  std::string dir;
+  std::string criterion = "D";
+};
+
+void run(const FragmentsCli& o) {
+  analysis::BreakCriterion c;
+  try {
+    c = analysis::BreakCriterion::parse(o.criterion);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  const std::string traj = (std::filesystem::path(o.dir) / "trajectory.h5").string();
+  if (!std::filesystem::exists(traj)) throw UsageError(o.dir + ": no trajectory.h5 (run `pmfrag run SCENE --out DIR` first)");
+  const auto rep = analysis::analyse_fragments(traj, c);
+  analysis::write_fragment_report(rep, o.dir);
+  const auto& end = rep.timeline.back();
+  long singles = 0;
+  for (const auto& g : rep.final_fragments) singles += g.particles == 1;
+  std::printf("fragments of %s: (p,q) = (%d,%d), a bond breaks when %s (%.4g cm), %ld frames%s\n", o.dir.c_str(), rep.p,
+              rep.q, rep.criterion.c_str(), rep.threshold_cm, rep.frames_read, rep.partial ? " (PARTIAL)" : "");
+  if (rep.onset_time >= 0)
+    std::printf("  onset (first broken bond, frame resolution): %.4e s\n", rep.onset_time);
+  else
+    std::printf("  no bond broke\n");
+  if (rep.separation_time >= 0)
+    std::printf("  separation (>= 2 fragments of >= 5 %% mass): %.4e s\n", rep.separation_time);
+  else
+    std::printf("  no separation into pieces of >= 5 %% of the mass\n");
+  std::printf("  at t = %.4e s: %ld broken bonds, %ld fragments (%ld of >= 2 particles, %ld single particles, %ld of >= 1 %% "
+              "mass), largest %.1f %% of the mass\n",
+              end.time, end.broken, end.fragments, end.fragments - singles, singles, end.fragments_1pct,
+              100.0 * end.largest_fraction);
+  if (rep.partial) std::printf("  note: %s\n", rep.note.c_str());
+  std::printf("  wrote fragments_timeline.csv, fragments_final.csv, fragment_sizes.csv, summary.json in %s\n", o.dir.c_str());
+}
+
+}  // namespace
+
+void add_fragments_command(CLI::App& app) {
+  auto o = std::make_shared<FragmentsCli>();
+  auto* cmd = app.add_subcommand("fragments", "Cluster broken bonds into fragments (timeline, final fragments, sizes)");
+  cmd->add_option("run_dir", o->dir, "Run folder (holds trajectory.h5)")->required();
+  cmd->add_option("--break", o->criterion,
+                  "When a bond counts as broken: D (longer than the interaction distance, default), rd (longer "
+                  "than the damage spacing) or a factor of r0, e.g. 1.5")
+      ->type_name("D|rd|FACTOR");
+  cmd->callback([o] { run(*o); });
+}
+
+}  // namespace pmfrag::app

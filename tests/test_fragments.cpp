@@ -1,0 +1,99 @@
+// Fragments: union-find, clustering of intact bonds, irreversible breakage, reports from a real run.
+#include "pmfrag/analysis/fragments.hpp"
+#include "pmfrag/analysis/union_find.hpp"
+#include "pmfrag/run.hpp"
+#include "pmfrag/system.hpp"
+#include "test_helpers.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <set>
+
+using namespace pmfrag;
+using namespace pmfrag::analysis;
+
+TEST(UnionFind, HandBuiltGraphs) {
+  UnionFind uf(7);
+  uf.unite(0, 1), uf.unite(1, 2), uf.unite(4, 5);
+  EXPECT_EQ(uf.find(0), uf.find(2));
+  EXPECT_NE(uf.find(0), uf.find(4));
+  EXPECT_EQ(uf.size_of(2), 3u);
+  EXPECT_EQ(uf.size_of(5), 2u);
+  EXPECT_EQ(uf.size_of(6), 1u);
+  uf.unite(2, 5);
+  EXPECT_EQ(uf.size_of(4), 5u);
+  uf.unite(0, 4);  // already joined: no change
+  EXPECT_EQ(uf.size_of(1), 5u);
+  // a long chain
+  UnionFind chain(1000);
+  for (std::size_t i = 0; i + 1 < 1000; ++i) chain.unite(i, i + 1);
+  EXPECT_EQ(chain.size_of(999), 1000u);
+}
+
+TEST(Fragments, BreakageIsIrreversibleAndLabelsAreByMass) {
+  // Four particles in a row, bonds 0-1, 1-2, 2-3, r0 = 1.
+  std::vector<std::array<int, 2>> bonds{{0, 1}, {1, 2}, {2, 3}};
+  FragmentTracker t(4, bonds, {1.0, 1.0, 1.0, 1.0}, 2, 1.5);
+  auto l = t.update({0, 0, 1, 0, 2, 0, 3, 0});
+  EXPECT_EQ(t.broken_count(), 0);
+  EXPECT_EQ(std::set<int>(l.fragment_id.begin(), l.fragment_id.end()).size(), 1u);
+  l = t.update({0, 0, 1, 0, 2, 0, 4.6, 0});  // bond 2-3 stretched to 2.6 > 1.5: breaks
+  EXPECT_EQ(t.broken_count(), 1);
+  EXPECT_EQ(l.fragment_id[0], 0);  // the three-particle piece is the largest: id 0
+  EXPECT_EQ(l.fragment_id[3], 1);
+  EXPECT_EQ(l.fragment_size[0], 3);
+  EXPECT_EQ(l.fragment_size[3], 1);
+  EXPECT_DOUBLE_EQ(l.damage[3], 1.0);
+  EXPECT_DOUBLE_EQ(l.damage[2], 0.5);
+  l = t.update({0, 0, 1, 0, 2, 0, 3, 0});  // back at r0: stays broken
+  EXPECT_EQ(t.broken_count(), 1);
+  EXPECT_EQ(l.fragment_size[3], 1);
+}
+
+TEST(Fragments, PlateCutAlongALineGivesTwoPiecesWithTheRightMasses) {
+  const std::string text = R"(
+[[body]]
+lattice = "triangular"
+shape = { kind = "rect", min = [0, 0], max = [4, 4] }
+slits = [ { from = [-1, 2.05], to = [5, 2.05] } ]
+[[phase]]
+p = 7
+q = 14
+[pair]
+[time]
+dt = 1e-7
+end = 1e-6
+)";
+  const Scene sc = parse_scene(text, "cut.toml");
+  const System sys = build_system(sc);
+  long above = 0;
+  for (const auto& x : sys.position) above += x.y() > 2.05;
+  const auto dir = test::temp_dir("cut");
+  RunOptions ro;
+  ro.out_dir = dir.string();
+  ASSERT_TRUE(run_scene(sc, ro).completed);
+  const auto rep = analyse_fragments((dir / "trajectory.h5").string(), BreakCriterion{});
+  ASSERT_EQ(rep.final_fragments.size(), 2u);
+  const double m = sys.phase_mass[0];
+  const long below = static_cast<long>(sys.size()) - above;
+  EXPECT_NEAR(rep.final_fragments[0].mass, m * std::max(above, below), 1e-12);
+  EXPECT_NEAR(rep.final_fragments[1].mass, m * std::min(above, below), 1e-12);
+  EXPECT_EQ(rep.timeline.back().broken, 0);  // cut bonds never existed: nothing "broke"
+  EXPECT_GT(rep.separation_time, -1.0);      // two pieces of >= 5 % from the first frame
+  write_fragment_report(rep, dir.string());
+  for (const char* f : {"fragments_timeline.csv", "fragments_final.csv", "fragment_sizes.csv", "summary.json"})
+    EXPECT_TRUE(std::filesystem::exists(dir / f)) << f;
+  std::ifstream js(dir / "summary.json");
+  const std::string s((std::istreambuf_iterator<char>(js)), std::istreambuf_iterator<char>());
+  EXPECT_NE(s.find("\"fragments\": 2"), std::string::npos) << s;
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Fragments, CriterionParsing) {
+  EXPECT_EQ(BreakCriterion::parse("D").kind, BreakCriterion::Kind::cutoff);
+  EXPECT_EQ(BreakCriterion::parse("rd").kind, BreakCriterion::Kind::damage);
+  EXPECT_DOUBLE_EQ(BreakCriterion::parse("1.5").factor, 1.5);
+  EXPECT_THROW(BreakCriterion::parse("0.5"), std::invalid_argument);
+  EXPECT_THROW(BreakCriterion::parse("x"), std::invalid_argument);
+}
