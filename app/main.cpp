@@ -1,4 +1,5 @@
 // pmfrag: particle modeling of dynamic fracture and fragmentation. This file only wires subcommands.
+#include "cmd_export.hpp"
 #include "cmd_fragments.hpp"
 #include "cmd_material.hpp"
 #include "cmd_run.hpp"
@@ -19,6 +20,7 @@ int main(int argc, char** argv) {
   pmfrag::app::add_run_command(app);
   pmfrag::app::add_scene_command(app);
   pmfrag::app::add_fragments_command(app);
+  pmfrag::app::add_export_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

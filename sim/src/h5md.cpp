@@ -237,6 +237,14 @@ H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& 
   scalar_dataset(par, "r_min", sys.r_min);
   scalar_dataset(par, "dimension", sys.dim);
   string_dataset(par, "pair_model", scene.pair ? (scene.pair->model == PairModel::bonded ? "bonded" : "cutoff") : "none");
+  {
+    // Every law and which phase pair uses it, so readers can evaluate bond forces (export, analysis).
+    std::vector<double> laws;
+    for (const auto& l : sys.laws) laws.insert(laws.end(), {double(l.p), double(l.q), l.G, l.H});
+    array_dataset(par, "laws", laws, {sys.laws.size(), 4});
+    const hsize_t np = sys.phase_names.size();
+    array_dataset(par, "phase_pair_law", sys.phase_pair_law, {np, np});
+  }
   if (sys.phase_names.size() == 1) {
     write_law(par, sys.laws.front(), sys.phase_mass.front());
   } else {
@@ -388,6 +396,14 @@ std::vector<double> H5mdReader::observable(const std::string& name) const {
   return v;
 }
 double H5mdReader::parameter(const std::string& name) const { return read_all<double>(file_, "/parameters/" + name).at(0); }
+std::vector<PairLaw> H5mdReader::laws() const {
+  const auto flat = read_all<double>(file_, "/parameters/laws");
+  std::vector<PairLaw> out;
+  for (std::size_t k = 0; k + 3 < flat.size(); k += 4)
+    out.push_back(PairLaw{static_cast<int>(flat[k]), static_cast<int>(flat[k + 1]), flat[k + 2], flat[k + 3]});
+  return out;
+}
+std::vector<int> H5mdReader::phase_pair_law() const { return read_all<int>(file_, "/parameters/phase_pair_law"); }
 namespace {
 std::string read_string(hid_t file, const char* path) {
   hid_t d = H5Dopen2(file, path, H5P_DEFAULT);

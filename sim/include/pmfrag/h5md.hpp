@@ -64,6 +64,9 @@ class H5mdReader {
   /// Observable time series by name (kinetic_energy, potential_energy, total_energy, boundary_work, ...).
   std::vector<double> observable(const std::string& name) const;
   double parameter(const std::string& name) const;
+  /// The distinct pair laws and, for phases a, b, the index of their law at [a * nphase + b].
+  std::vector<PairLaw> laws() const;
+  std::vector<int> phase_pair_law() const;
   std::string scene_text() const;
   std::string scene_file() const;
   std::vector<std::string> overrides() const;

@@ -1,0 +1,58 @@
+#include "cmd_export.hpp"
+
+#include "parse.hpp"
+#include "pmfrag/analysis/export_vtk.hpp"
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+
+namespace pmfrag::app {
+
+namespace {
+
+struct ExportCli {
+  std::string dir, fields, criterion = "D";
+  long every = 1;
+};
+
+void run(const ExportCli& o) {
+  analysis::ExportOptions opt;
+  opt.every = o.every;
+  try {
+    opt.criterion = analysis::BreakCriterion::parse(o.criterion);
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  std::stringstream ss(o.fields);
+  for (std::string f; std::getline(ss, f, ',');)
+    if (!f.empty()) {
+      if (!analysis::export_fields().count(f)) throw UsageError("--fields: unknown field '" + f + "'");
+      opt.fields.insert(f);
+    }
+  if (!std::filesystem::exists(std::filesystem::path(o.dir) / "trajectory.h5"))
+    throw UsageError(o.dir + ": no trajectory.h5 (run `pmfrag run SCENE --out DIR` first)");
+  const auto r = analysis::export_vtk(o.dir, opt);
+  std::printf("exported %ld of %ld frames to %s/vtk/ and %s/particles.pvd%s\n", r.frames_written, r.frames_read,
+              o.dir.c_str(), o.dir.c_str(), r.partial ? " (PARTIAL)" : "");
+  if (r.partial) std::printf("note: %s\n", r.note.c_str());
+}
+
+}  // namespace
+
+void add_export_command(CLI::App& app) {
+  auto o = std::make_shared<ExportCli>();
+  auto* cmd = app.add_subcommand("export", "Write VTU frames and a PVD collection for ParaView");
+  cmd->add_option("run_dir", o->dir, "Run folder (holds trajectory.h5)")->required();
+  cmd->add_option("--every", o->every, "Write every K-th frame (the last always)")->check(CLI::PositiveNumber);
+  std::string names;
+  for (const auto& f : analysis::export_fields()) names += (names.empty() ? "" : ", ") + f;
+  cmd->add_option("--fields", o->fields, "Comma-separated arrays to write (default all): " + names)->type_name("A,B,...");
+  cmd->add_option("--break", o->criterion, "When a bond counts as broken: D (default), rd, or a factor of r0")
+      ->type_name("D|rd|FACTOR");
+  cmd->callback([o] { run(*o); });
+}
+
+}  // namespace pmfrag::app
