@@ -6,7 +6,10 @@
 #include <omp.h>
 #include <unistd.h>
 
+#include <csignal>
+
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <stdexcept>
 
@@ -30,8 +33,15 @@ std::string clock_text(double s) {
   return b;
 }
 
+extern "C" void on_stop_signal(int) { request_stop(); }
+
+/// Exit code for a run stopped by SIGINT/SIGTERM: the shell convention for SIGINT.
+constexpr int exit_interrupted = 130;
+
 void run(const RunCli& o) {
   if (o.threads > 0) omp_set_num_threads(o.threads);
+  std::signal(SIGINT, on_stop_signal);
+  std::signal(SIGTERM, on_stop_signal);
   if (o.resume.empty() && (o.scene.empty() || o.out.empty()))
     throw UsageError("run: give SCENE and --out DIR, or --resume DIR");
   if (!o.resume.empty() && !o.scene.empty()) throw UsageError("--resume: takes the run folder only, not a scene");
@@ -72,6 +82,11 @@ void run(const RunCli& o) {
   else
     std::printf("no bond broke\n");
   std::printf("trajectory: %s/trajectory.h5\n", ro.out_dir.c_str());
+  if (r.interrupted) {
+    std::fprintf(stderr, "pmfrag: %s\n", r.message.c_str());
+    std::fflush(nullptr);
+    std::_Exit(exit_interrupted);
+  }
   if (!r.completed) throw std::runtime_error(r.message + " (frames written so far are kept)");
 }
 

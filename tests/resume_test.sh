@@ -25,6 +25,26 @@ for delay in 0.02 0.$((RANDOM % 4 + 2)); do
     fi
   done
 done
+# SIGINT (and SIGTERM alike): a checkpoint at that step, exit code 130, and the resumed run is identical.
+rm -rf "$work/int"
+"$pmfrag" run "$scene" --out "$work/int" -q --set time.end=6e-3 > /dev/null 2>&1 &
+pid=$!
+sleep 0.$((RANDOM % 3 + 2))
+kill -INT $pid
+wait $pid
+rc=$?
+if [ $rc -eq 0 ]; then
+  echo "note: the run finished before SIGINT arrived"
+else
+  [ $rc -eq 130 ] || { echo "FAIL: SIGINT exit code $rc, expected 130"; fail=1; }
+  grep -q '"interrupted": true' "$work/int/run.json" || { echo "FAIL: run.json does not say interrupted"; fail=1; }
+  h5ls -r "$work/int/trajectory.h5" > /dev/null || { echo "FAIL: interrupted trajectory unreadable"; fail=1; }
+  "$pmfrag" run --resume "$work/int" -q > /dev/null || { echo "FAIL: resume after SIGINT"; fail=1; }
+  for obj in /particles/all/position /particles/all/velocity /observables; do
+    h5diff -q "$work/whole/trajectory.h5" "$work/int/trajectory.h5" "$obj" "$obj" || { echo "FAIL: $obj differs after SIGINT + resume"; fail=1; }
+  done
+  echo "SIGINT: exit 130, checkpoint, resumed identically"
+fi
 out=$("$pmfrag" run --resume "$work/cut")
 echo "$out" | grep -q "already finished" || { echo "FAIL: finished run not recognised: $out"; fail=1; }
 [ $fail -eq 0 ] && echo "resume is bitwise identical"

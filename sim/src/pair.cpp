@@ -211,13 +211,18 @@ class PairEffect final : public Effect<D> {
       for (std::size_t b = 0; b < bi_.size(); ++b)
         if (alive_[b]) bond_other[static_cast<std::size_t>(fill[static_cast<std::size_t>(bi_[b])]++)] = bj_[b];
     }
+    std::vector<std::pair<int, int>> found;
     cells_.for_each_pair(s.x, max_reach_ + skin_, [&](std::uint32_t a, std::uint32_t b, double) {
       if (spec_.model == PairModel::bonded) {
         for (int e = bond_off[a]; e < bond_off[a + 1]; ++e)
           if (bond_other[static_cast<std::size_t>(e)] == static_cast<int>(b)) return;
       }
-      list_.add(static_cast<int>(a), static_cast<int>(b), law_of(static_cast<int>(a), static_cast<int>(b)));
+      found.push_back({static_cast<int>(a), static_cast<int>(b)});
     });
+    // Sorted, so the order in which each particle sums its active pairs does not depend on when the list was
+    // built (pairs beyond reach add exactly zero): contact forces are then independent of rebuild timing.
+    std::sort(found.begin(), found.end());
+    for (const auto& [a, b] : found) list_.add(a, b, law_of(a, b));
     list_.index(n_);
     if (spec_.model == PairModel::cutoff) list_stencil_ = detail::BondStencil<D>(n_, list_.i, list_.j, list_.law);
     moved_bound_ = 0.0;

@@ -4,6 +4,7 @@
 #include "pmfrag/leapfrog.hpp"
 
 #include <chrono>
+#include <csignal>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -14,6 +15,8 @@
 namespace pmfrag {
 
 namespace {
+
+volatile std::sig_atomic_t stop_requested = 0;
 
 std::string fmt(const char* f, double v) {
   char b[64];
@@ -104,6 +107,14 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
       if (take_checkpoint) lf.canonicalize();
       if (k % every == 0 || k == steps) write();
       if (take_checkpoint) checkpoint();
+      if (stop_requested && k < steps) {
+        // Interrupted: keep the frames written and checkpoint this step so --resume continues from here.
+        checkpoint();
+        res.interrupted = true;
+        res.message = "interrupted at step " + std::to_string(k) + " (t = " + fmt("%.6g", lf.state().time()) +
+                      " s); continue with: pmfrag run --resume " + opt.out_dir;
+        break;
+      }
       if (opt.progress && (k & 255) == 0) {
         const auto now = clock::now();
         if (std::chrono::duration<double>(now - last_report).count() > 0.2) {
@@ -117,7 +128,7 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
         }
       }
     }
-    res.completed = true;
+    res.completed = !res.interrupted;
   } catch (const GuardError& e) {
     res.completed = false;
     res.message = e.what();
@@ -135,7 +146,8 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
   const fs::path tmp = dir / "run.json.tmp";
   {
     std::ofstream js(tmp);
-    js << "{\n  \"completed\": " << (res.completed ? "true" : "false") << ",\n  \"message\": \"";
+    js << "{\n  \"completed\": " << (res.completed ? "true" : "false")
+       << ",\n  \"interrupted\": " << (res.interrupted ? "true" : "false") << ",\n  \"message\": \"";
     for (char c : res.message) js << (c == '"' || c == '\\' ? std::string("\\") + c : std::string(1, c));
     js << "\",\n  \"particles\": " << res.particles << ",\n  \"steps\": " << res.steps
        << ",\n  \"frames\": " << res.frames << ",\n  \"dt_s\": " << fmt("%.10g", dt)
@@ -148,6 +160,8 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
 }
 
 }  // namespace
+
+void request_stop() noexcept { stop_requested = 1; }
 
 RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   const System sys = build_system(scene);

@@ -30,7 +30,8 @@ struct RunResult {
   std::size_t particles = 0;
   double dt = 0.0, dt_limit = 0.0, wall_s = 0.0;
   double first_break_time = -1.0;  ///< s; -1 if no bond broke
-  bool completed = false;          ///< false: stopped by the guard (message says why)
+  bool completed = false;          ///< false: stopped by the guard or interrupted (message says why)
+  bool interrupted = false;        ///< stopped by request_stop(): a checkpoint was written at that step
   std::string message;
   double particle_steps_per_s() const { return wall_s > 0 ? static_cast<double>(particles) * steps / wall_s : 0.0; }
 };
@@ -41,6 +42,10 @@ struct UnstableStepError : std::runtime_error {
 };
 
 RunResult run_scene(const Scene& scene, const RunOptions& options);
+
+/// Asks a running simulation to stop at the end of its current step, write a checkpoint and return
+/// (RunResult::interrupted). Async-signal-safe: call it from a SIGINT/SIGTERM handler.
+void request_stop() noexcept;
 
 /// Continues the run in options.out_dir from its last checkpoint (the scene and its overrides are read from
 /// the trajectory). Killed before the first checkpoint: starts over. Already finished: says so in
