@@ -2,6 +2,7 @@
 #include "cmd_export.hpp"
 #include "cmd_fragments.hpp"
 #include "cmd_material.hpp"
+#include "cmd_render.hpp"
 #include "cmd_run.hpp"
 #include "cmd_scene.hpp"
 #include "parse.hpp"
@@ -21,6 +22,7 @@ int main(int argc, char** argv) {
   pmfrag::app::add_scene_command(app);
   pmfrag::app::add_fragments_command(app);
   pmfrag::app::add_export_command(app);
+  pmfrag::app::add_render_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

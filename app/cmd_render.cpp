@@ -1,0 +1,191 @@
+#include "cmd_render.hpp"
+
+#include "parse.hpp"
+#include "pmfrag/analysis/fragments.hpp"
+#include "pmfrag/h5md.hpp"
+#include "pmfrag/render/frames.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <regex>
+#include <sstream>
+#include <stdexcept>
+
+namespace pmfrag::app {
+
+namespace {
+
+struct RenderCli {
+  std::string dir, field = "fragment_id", panel, out;
+  long every = 1;
+  int size = 1024;
+  bool no_frames = false;
+};
+
+// One value per particle for the chosen field.
+std::vector<double> field_values(const std::string& field, const TrajectoryFrame& f, const TrajectoryFrame& first,
+                                 const analysis::FrameLabels& lab, const std::vector<int>& species, int dim) {
+  const std::size_t n = species.size(), d = static_cast<std::size_t>(dim);
+  std::vector<double> v(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    double s = 0;
+    if (field == "fragment_id") {
+      s = lab.fragment_id[i];
+    } else if (field == "phase") {
+      s = species[i];
+    } else if (field == "damage") {
+      s = lab.damage[i];
+    } else if (field == "displacement") {
+      for (std::size_t c = 0; c < d; ++c) s += std::pow(f.position[i * d + c] - first.position[i * d + c], 2);
+      s = std::sqrt(s);
+    } else if (field == "speed") {
+      for (std::size_t c = 0; c < d; ++c) s += f.velocity[i * d + c] * f.velocity[i * d + c];
+      s = std::sqrt(s);
+    }
+    v[i] = s;
+  }
+  return v;
+}
+
+render::FramePicture picture(const TrajectoryFrame& f, std::vector<double> values, int dim) {
+  render::FramePicture p;
+  const std::size_t n = values.size(), d = static_cast<std::size_t>(dim);
+  p.xyz.resize(3 * n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t c = 0; c < 3; ++c) p.xyz[3 * i + c] = c < d ? f.position[i * d + c] : 0.0;
+  p.value = std::move(values);
+  p.time = f.time;
+  return p;
+}
+
+void run(const RenderCli& o) {
+  const std::vector<std::string> fields{"fragment_id", "displacement", "damage", "speed", "phase"};
+  if (std::find(fields.begin(), fields.end(), o.field) == fields.end())
+    throw UsageError("--field: expected fragment_id, displacement, damage, speed or phase (got '" + o.field + "')");
+  if (o.size < 64 || o.size > 8192) throw UsageError("--size: must be in 64..8192");
+  namespace fs = std::filesystem;
+  const fs::path dir(o.dir);
+  if (!fs::exists(dir / "trajectory.h5")) throw UsageError(o.dir + ": no trajectory.h5 (run `pmfrag run` first)");
+  std::vector<double> panel_at;
+  if (!o.panel.empty()) {
+    std::stringstream ss(o.panel);
+    for (std::string s; std::getline(ss, s, ',');) {
+      const auto v = parse_numbers("--panel", s, 1)[0];
+      if (v < 0 || v > 1) throw UsageError("--panel: each value is a fraction of the run's duration in [0, 1]");
+      panel_at.push_back(v);
+    }
+  }
+
+  H5mdReader rd((dir / "trajectory.h5").string());
+  const int dim = rd.dim();
+  if (dim != 2) throw UsageError("render: 3-D views are not implemented yet (this run is 3-D)");
+  const auto species = rd.species();
+  const double r0 = rd.parameter("r0");
+  analysis::FragmentTracker tracker(rd.particles(), rd.bonds(), rd.mass(), dim, rd.parameter("cutoff"));
+  const long frames = rd.frames();
+  const TrajectoryFrame first = rd.frame(0);
+  const TrajectoryFrame last = rd.frame(frames - 1);
+
+  render::View view;
+  view.xmin = view.ymin = 1e300;
+  view.xmax = view.ymax = -1e300;
+  for (std::size_t i = 0; i < species.size(); ++i) {
+    view.xmin = std::min(view.xmin, first.position[2 * i]), view.xmax = std::max(view.xmax, first.position[2 * i]);
+    view.ymin = std::min(view.ymin, first.position[2 * i + 1]), view.ymax = std::max(view.ymax, first.position[2 * i + 1]);
+  }
+  view.radius = 0.45 * r0;
+
+  render::FieldSpec spec;
+  spec.categorical = o.field == "fragment_id" || o.field == "phase";
+  spec.title = o.field == "fragment_id"    ? "fragment"
+               : o.field == "phase"        ? "phase"
+               : o.field == "damage"       ? "damage"
+               : o.field == "displacement" ? "displacement\n[cm]"
+                                           : "speed\n[cm/s]";
+  if (!spec.categorical) {  // one range for the whole sequence, from a pre-pass
+    spec.min = 0.0;
+    spec.max = o.field == "damage" ? 1.0 : 0.0;
+    if (o.field != "damage") {
+      analysis::FragmentTracker probe(rd.particles(), rd.bonds(), rd.mass(), dim, rd.parameter("cutoff"));
+      for (long k = 0; k < frames; ++k) {
+        const auto f = rd.frame(k);
+        const auto v = field_values(o.field, f, first, probe.update(f.position), species, dim);
+        spec.max = std::max(spec.max, *std::max_element(v.begin(), v.end()));
+      }
+    }
+  }
+  std::string title;
+  {
+    const std::string text = rd.scene_text();
+    std::smatch m;
+    if (std::regex_search(text, m, std::regex("title\\s*=\\s*\"([^\"]*)\""))) title = m[1];
+    if (title.empty()) title = o.dir;
+  }
+
+  render::HeadlessWindow window(o.size, o.size);
+  const fs::path frames_dir = dir / "frames";
+  if (!o.no_frames) fs::create_directories(frames_dir);
+  std::vector<long> panel_frames;
+  for (double a : panel_at) {
+    const double t = a * last.time;
+    long best = 0;
+    for (long k = 0; k < frames; ++k)
+      if (std::fabs(rd.frame(k).time - t) < std::fabs(rd.frame(best).time - t)) best = k;
+    panel_frames.push_back(best);
+  }
+  std::vector<render::FramePicture> panel(panel_frames.size());
+  const auto t0 = std::chrono::steady_clock::now();
+  long rendered = 0;
+  for (long k = 0; k < frames; ++k) {
+    const auto f = rd.frame(k);
+    const auto lab = tracker.update(f.position);  // every frame: breakage is history-dependent
+    const bool want_frame = !o.no_frames && (k % o.every == 0 || k == frames - 1);
+    const bool in_panel = std::find(panel_frames.begin(), panel_frames.end(), k) != panel_frames.end();
+    if (!want_frame && !in_panel) continue;
+    auto pic = picture(f, field_values(o.field, f, first, lab, species, dim), dim);
+    if (want_frame) {
+      char name[32];
+      std::snprintf(name, sizeof name, "frame_%05ld.png", k);
+      render::render_png(window, view, spec, {pic}, "", o.size, o.size, (frames_dir / name).string());
+      ++rendered;
+    }
+    for (std::size_t j = 0; j < panel_frames.size(); ++j)
+      if (panel_frames[j] == k) panel[j] = pic;
+  }
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!o.no_frames)
+    std::printf("rendered %ld frames to %s (%.1f frames/s incl. PNG)\n", rendered, frames_dir.c_str(), rendered / secs);
+  if (!panel.empty()) {
+    const char* letters = "abcdefghijklmnopqrstuvwxyz";
+    for (std::size_t j = 0; j < panel.size(); ++j) panel[j].caption = std::string("(") + letters[j % 26] + ")";
+    const std::string out = o.out.empty() ? (dir / "panel.png").string() : o.out;
+    const int w = o.size / 2;
+    const double aspect = (view.ymax - view.ymin) / std::max(1e-9, view.xmax - view.xmin);
+    const int h = static_cast<int>(w * std::clamp(aspect, 0.5, 2.0));
+    render::render_png(window, view, spec, panel, title, w, h, out, 9);
+    std::printf("wrote the %zu-panel figure %s\n", panel.size(), out.c_str());
+  }
+}
+
+}  // namespace
+
+void add_render_command(CLI::App& app) {
+  auto o = std::make_shared<RenderCli>();
+  auto* cmd = app.add_subcommand("render", "PNG frames of a run (RUN_DIR/frames/) and figure panels, with no display");
+  cmd->add_option("run_dir", o->dir, "Run folder (holds trajectory.h5)")->required();
+  cmd->add_option("--field", o->field, "Colour by: fragment_id (default), displacement, damage, speed, phase");
+  cmd->add_option("--every", o->every, "Render every K-th frame (the last always)")->check(CLI::PositiveNumber);
+  cmd->add_option("--size", o->size, "Frame size in pixels (square, default 1024)");
+  cmd->add_option("--panel", o->panel,
+                  "Also compose one figure of these times, as fractions of the run, e.g. 0,0.7,0.9,1 (like Figs. 4-6)")
+      ->type_name("F1,F2,...");
+  cmd->add_option("--panel-out", o->out, "Where to write the panel (default RUN_DIR/panel.png)");
+  cmd->add_flag("--no-frames", o->no_frames, "Only the panel, no frame sequence");
+  cmd->callback([o] { run(*o); });
+}
+
+}  // namespace pmfrag::app

@@ -1,0 +1,38 @@
+// Pictures of particle frames: particles as shaded discs coloured by a field, a colour bar with units, a time
+// label and a 1 cm scale bar, under a camera fixed to the initial body. One frame per image, or several side
+// by side as a figure panel (the paper's Figs. 4-6).
+#pragma once
+
+#include "pmfrag/render/headless.hpp"
+
+#include <string>
+#include <vector>
+
+namespace pmfrag::render {
+
+struct FieldSpec {
+  std::string title;         ///< colour bar title with units, e.g. "displacement [cm]"
+  bool categorical = false;  ///< fragment ids, phases: a cycling colour-blind-safe palette
+  double min = 0.0, max = 1.0;
+};
+
+/// What a camera frames: the initial body's bounding box, fixed over a sequence.
+struct View {
+  double xmin = 0, xmax = 1, ymin = 0, ymax = 1;
+  double radius = 0.09;  ///< particle disc radius [cm]
+};
+
+struct FramePicture {
+  std::vector<double> xyz;    ///< 3 per particle [cm]
+  std::vector<double> value;  ///< one per particle (field value, or category index)
+  double time = 0.0;          ///< s
+  std::string caption;        ///< under the time in panels, e.g. "(b)"
+};
+
+/// Renders pictures side by side (one or more) into a PNG of panel_w*count x panel_h (+ a title strip when
+/// title is not empty). Throws std::runtime_error if the PNG cannot be written.
+void render_png(HeadlessWindow& window, const View& view, const FieldSpec& field,
+                const std::vector<FramePicture>& pictures, const std::string& title, int panel_w, int panel_h,
+                const std::string& png_path, int png_compression = 4);
+
+}  // namespace pmfrag::render

@@ -1,0 +1,235 @@
+#include "pmfrag/render/frames.hpp"
+
+#include <vtkActor.h>
+#include <vtkActor2D.h>
+#include <vtkCellArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkGenericOpenGLRenderWindow.h>
+#include <vtkLookupTable.h>
+#include <vtkNew.h>
+#include <vtkPNGWriter.h>
+#include <vtkPointData.h>
+#include <vtkPointGaussianMapper.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkPolyDataMapper.h>
+#include <vtkProperty.h>
+#include <vtkRenderer.h>
+#include <vtkRendererCollection.h>
+#include <vtkScalarBarActor.h>
+#include <vtkTextActor.h>
+#include <vtkTextProperty.h>
+#include <vtkCamera.h>
+#include <vtkCoordinate.h>
+#include <vtkWindowToImageFilter.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+
+namespace pmfrag::render {
+
+namespace {
+
+// Okabe-Ito: distinguishable with the common colour-vision deficiencies.
+const double palette[8][3] = {{0.902, 0.624, 0.000}, {0.337, 0.706, 0.914}, {0.000, 0.620, 0.451},
+                              {0.941, 0.894, 0.259}, {0.000, 0.447, 0.698}, {0.835, 0.369, 0.000},
+                              {0.800, 0.475, 0.655}, {0.600, 0.600, 0.600}};
+
+// Each splat drawn as a disc with a little shading toward its rim, so touching particles stay distinct.
+const char* disc_shader =
+    "//VTK::Color::Impl\n"
+    "float rr = dot(offsetVCVSOutput.xy, offsetVCVSOutput.xy);\n"
+    "if (rr > 1.0) { discard; }\n"
+    "float shade = 1.0 - 0.35 * rr;\n"
+    "ambientColor *= shade;\n"
+    "diffuseColor *= shade;\n";
+
+vtkNew<vtkLookupTable> make_lut(const FieldSpec& f) {
+  vtkNew<vtkLookupTable> lut;
+  if (f.categorical) {
+    lut->SetNumberOfTableValues(8);
+    for (int k = 0; k < 8; ++k) lut->SetTableValue(k, palette[k][0], palette[k][1], palette[k][2], 1.0);
+    lut->SetTableRange(0, 7);
+  } else {
+    // A perceptual blue-to-yellow ramp (viridis-like endpoints through a few anchors).
+    const double anchors[5][3] = {{0.267, 0.005, 0.329}, {0.231, 0.322, 0.545}, {0.129, 0.569, 0.549},
+                                  {0.369, 0.788, 0.384}, {0.993, 0.906, 0.144}};
+    lut->SetNumberOfTableValues(256);
+    for (int k = 0; k < 256; ++k) {
+      const double t = k / 255.0 * 4.0;
+      const int a = std::min(3, static_cast<int>(t));
+      const double w = t - a;
+      lut->SetTableValue(k, anchors[a][0] * (1 - w) + anchors[a + 1][0] * w, anchors[a][1] * (1 - w) + anchors[a + 1][1] * w,
+                         anchors[a][2] * (1 - w) + anchors[a + 1][2] * w, 1.0);
+    }
+    lut->SetTableRange(f.min, f.max > f.min ? f.max : f.min + 1.0);
+  }
+  lut->Build();
+  return lut;
+}
+
+std::string time_text(double t) {
+  char b[64];
+  if (t == 0.0)
+    std::snprintf(b, sizeof b, "T = 0 s");
+  else
+    std::snprintf(b, sizeof b, "T = %.4g s", t);
+  return b;
+}
+
+}  // namespace
+
+void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, const std::vector<FramePicture>& pics,
+                const std::string& title, int panel_w, int panel_h, const std::string& png_path, int compression) {
+  vtkGenericOpenGLRenderWindow* win = hw.window();
+  const int count = static_cast<int>(pics.size());
+  const int title_h = title.empty() ? 0 : std::max(40, panel_h / 14);
+  const int width = panel_w * count, height = panel_h + title_h;
+  win->SetSize(width, height);
+  // Renderers from a previous call are removed: the window is reused for a whole sequence.
+  win->GetRenderers()->RemoveAllItems();
+  auto lut = make_lut(field);
+  const double top = static_cast<double>(panel_h) / height;
+
+  std::vector<vtkSmartPointer<vtkRenderer>> keep;
+  for (int k = 0; k < count; ++k) {
+    const FramePicture& pic = pics[static_cast<std::size_t>(k)];
+    const vtkIdType n = static_cast<vtkIdType>(pic.value.size());
+    vtkNew<vtkPoints> pts;
+    pts->SetDataTypeToDouble();
+    pts->SetNumberOfPoints(n);
+    for (vtkIdType i = 0; i < n; ++i)
+      pts->SetPoint(i, pic.xyz[3 * static_cast<std::size_t>(i)], pic.xyz[3 * static_cast<std::size_t>(i) + 1],
+                    pic.xyz[3 * static_cast<std::size_t>(i) + 2]);
+    vtkNew<vtkDoubleArray> val;
+    val->SetName("value");
+    val->SetNumberOfTuples(n);
+    for (vtkIdType i = 0; i < n; ++i) {
+      const double v = pic.value[static_cast<std::size_t>(i)];
+      val->SetValue(i, field.categorical ? std::fmod(v, 8.0) : v);
+    }
+    vtkNew<vtkPolyData> poly;
+    poly->SetPoints(pts);
+    poly->GetPointData()->SetScalars(val);
+    vtkNew<vtkPointGaussianMapper> mapper;
+    mapper->SetInputData(poly);
+    mapper->SetScaleFactor(view.radius);
+    mapper->SetSplatShaderCode(disc_shader);
+    mapper->SetLookupTable(lut);
+    mapper->SetScalarRange(lut->GetTableRange());
+    mapper->ScalarVisibilityOn();
+    mapper->EmissiveOff();
+    vtkNew<vtkActor> actor;
+    actor->SetMapper(mapper);
+    actor->GetProperty()->SetAmbient(1.0);
+    actor->GetProperty()->SetDiffuse(0.0);
+
+    vtkSmartPointer<vtkRenderer> ren = vtkSmartPointer<vtkRenderer>::New();
+    ren->SetViewport(static_cast<double>(k) / count, 0.0, static_cast<double>(k + 1) / count, top);
+    ren->SetBackground(1.0, 1.0, 1.0);
+    ren->AddActor(actor);
+
+    // Camera fixed to the initial body (with a margin), the same for every frame of a sequence.
+    const double cx = 0.5 * (view.xmin + view.xmax), cy = 0.5 * (view.ymin + view.ymax);
+    const double hw_ = 0.5 * (view.xmax - view.xmin), hh = 0.5 * (view.ymax - view.ymin);
+    const double aspect = static_cast<double>(panel_w) / panel_h;
+    vtkCamera* cam = ren->GetActiveCamera();
+    cam->ParallelProjectionOn();
+    cam->SetFocalPoint(cx, cy, 0.0);
+    cam->SetPosition(cx, cy, 100.0);
+    cam->SetViewUp(0, 1, 0);
+    cam->SetParallelScale(1.16 * std::max(hh, hw_ / aspect) + view.radius);
+    cam->SetClippingRange(1.0, 200.0);
+
+    // Time label and caption.
+    vtkNew<vtkTextActor> label;
+    label->SetInput((time_text(pic.time) + (pic.caption.empty() ? "" : "   " + pic.caption)).c_str());
+    label->GetTextProperty()->SetFontSize(std::max(14, panel_h / 36));
+    label->GetTextProperty()->SetColor(0.1, 0.1, 0.1);
+    label->GetPositionCoordinate()->SetCoordinateSystemToViewport();  // relative to this panel
+    label->GetPositionCoordinate()->SetValue(12, panel_h - std::max(14, panel_h / 36) - 14);
+    ren->AddActor2D(label);
+
+    // Scale bar: 1 cm in world units at the lower left of the view.
+    const double scale = cam->GetParallelScale();
+    const double x0 = cx - scale * aspect * 0.92, y0 = cy - scale * 0.94;
+    vtkNew<vtkPoints> sp;
+    sp->InsertNextPoint(x0, y0, 1.0);
+    sp->InsertNextPoint(x0 + 1.0, y0, 1.0);
+    vtkNew<vtkCellArray> line;
+    const vtkIdType ids[2] = {0, 1};
+    line->InsertNextCell(2, ids);
+    vtkNew<vtkPolyData> bar;
+    bar->SetPoints(sp);
+    bar->SetLines(line);
+    vtkNew<vtkPolyDataMapper> bar_mapper;
+    bar_mapper->SetInputData(bar);
+    vtkNew<vtkActor> bar_actor;
+    bar_actor->SetMapper(bar_mapper);
+    bar_actor->GetProperty()->SetColor(0.1, 0.1, 0.1);
+    bar_actor->GetProperty()->SetLineWidth(std::max(2.0, panel_h / 300.0));
+    ren->AddActor(bar_actor);
+    vtkNew<vtkTextActor> bar_text;
+    bar_text->SetInput("1 cm");
+    bar_text->GetTextProperty()->SetFontSize(std::max(12, panel_h / 45));
+    bar_text->GetTextProperty()->SetColor(0.1, 0.1, 0.1);
+    bar_text->GetPositionCoordinate()->SetCoordinateSystemToWorld();
+    bar_text->GetPositionCoordinate()->SetValue(x0, y0 + 0.12, 1.0);
+    ren->AddActor2D(bar_text);
+
+    if (k == count - 1) {  // one colour bar, on the right panel
+      vtkNew<vtkScalarBarActor> sb;
+      sb->SetLookupTable(lut);
+      sb->SetTitle(field.title.c_str());
+      sb->SetNumberOfLabels(field.categorical ? 8 : 5);
+      if (field.categorical) sb->SetLabelFormat("%.0f");
+      sb->SetOrientationToVertical();
+      sb->SetPosition(0.84, 0.1);
+      sb->SetWidth(0.13);
+      sb->SetHeight(0.8);
+      sb->GetTitleTextProperty()->SetColor(0.1, 0.1, 0.1);
+      sb->GetLabelTextProperty()->SetColor(0.1, 0.1, 0.1);
+      sb->GetTitleTextProperty()->SetFontSize(std::max(12, panel_h / 45));
+      sb->UnconstrainedFontSizeOn();
+      ren->AddActor2D(sb);
+    }
+    win->AddRenderer(ren);
+    keep.push_back(ren);
+  }
+  if (title_h > 0) {
+    vtkSmartPointer<vtkRenderer> ren = vtkSmartPointer<vtkRenderer>::New();
+    ren->SetViewport(0.0, top, 1.0, 1.0);
+    ren->SetBackground(1.0, 1.0, 1.0);
+    vtkNew<vtkTextActor> t;
+    t->SetInput(title.c_str());
+    t->GetTextProperty()->SetFontSize(title_h / 2);
+    t->GetTextProperty()->SetColor(0.1, 0.1, 0.1);
+    t->GetTextProperty()->BoldOn();
+    t->GetPositionCoordinate()->SetCoordinateSystemToViewport();
+    t->GetPositionCoordinate()->SetValue(14, title_h / 4);
+    ren->AddActor2D(t);
+    win->AddRenderer(ren);
+    keep.push_back(ren);
+  }
+  win->Render();
+
+  vtkNew<vtkWindowToImageFilter> grab;
+  grab->SetInput(win);
+  grab->SetInputBufferTypeToRGB();
+  grab->ReadFrontBufferOff();
+  grab->ShouldRerenderOff();
+  grab->Update();
+  const std::string tmp = png_path + ".tmp.png";
+  vtkNew<vtkPNGWriter> png;
+  png->SetCompressionLevel(compression);
+  png->SetFileName(tmp.c_str());
+  png->SetInputConnection(grab->GetOutputPort());
+  png->Write();
+  if (png->GetErrorCode() != 0) throw std::runtime_error(png_path + ": PNG writer failed");
+  std::filesystem::rename(tmp, png_path);
+}
+
+}  // namespace pmfrag::render

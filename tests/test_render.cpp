@@ -1,0 +1,87 @@
+// Headless rendering: sizes, colours at the particles' projected positions, background elsewhere, labels.
+#include "pmfrag/render/frames.hpp"
+#include "test_helpers.hpp"
+
+#include <gtest/gtest.h>
+#include <vtkImageData.h>
+#include <vtkNew.h>
+#include <vtkPNGReader.h>
+#include <vtkSmartPointer.h>
+
+#include <cstdlib>
+
+using namespace pmfrag;
+
+namespace {
+struct Image {
+  int w = 0, h = 0;
+  vtkSmartPointer<vtkImageData> data;
+  // (x, y) with y from the bottom, as VTK stores images
+  std::array<int, 3> at(int x, int y) const {
+    auto* p = static_cast<unsigned char*>(data->GetScalarPointer(x, y, 0));
+    return {p[0], p[1], p[2]};
+  }
+};
+Image read_png(const std::string& path) {
+  vtkNew<vtkPNGReader> r;
+  r->SetFileName(path.c_str());
+  r->Update();
+  Image im;
+  im.data = r->GetOutput();
+  int dims[3];
+  im.data->GetDimensions(dims);
+  im.w = dims[0], im.h = dims[1];
+  return im;
+}
+bool white(const std::array<int, 3>& c) { return c[0] > 250 && c[1] > 250 && c[2] > 250; }
+}  // namespace
+
+TEST(Render, ParticlesAppearWhereProjectedInTheirColours) {
+  const char* display = std::getenv("DISPLAY");  // ctest clears it: rendering must not need a display
+  ASSERT_TRUE(display == nullptr || *display == '\0');
+  const auto dir = test::temp_dir("render");
+  render::HeadlessWindow window(300, 300);
+  render::View view;
+  view.xmin = view.ymin = -1.0;
+  view.xmax = view.ymax = 1.0;
+  view.radius = 0.08;
+  render::FieldSpec field;
+  field.categorical = true;
+  field.title = "fragment";
+  render::FramePicture a;
+  a.xyz = {-0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.0};
+  a.value = {0, 1, 2};
+  a.time = 1.024e-2;
+  render::FramePicture b = a;
+  b.xyz[1] = 0.5;  // first particle moved up
+  const std::string pa = (dir / "a.png").string(), pb = (dir / "b.png").string();
+  render::render_png(window, view, field, {a}, "", 300, 300, pa);
+  render::render_png(window, view, field, {b}, "", 300, 300, pb);
+  const Image ia = read_png(pa), ib = read_png(pb);
+  ASSERT_EQ(ia.w, 300);
+  ASSERT_EQ(ia.h, 300);
+  // Parallel projection: scale = 1.16 x 1 + radius world units per half height.
+  const double scale = 1.16 + 0.08;
+  auto px = [&](double x) { return static_cast<int>(std::lround(150 + x / scale * 150)); };
+  const int okabe[3][3] = {{230, 159, 0}, {86, 180, 233}, {0, 158, 115}};
+  for (int k = 0; k < 3; ++k) {
+    const auto c = ia.at(px(a.xyz[3 * k]), px(0.0));
+    for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(c[ch], okabe[k][ch], 3) << "particle " << k << " channel " << ch;
+  }
+  EXPECT_TRUE(white(ia.at(px(0.0), px(-0.6))));  // between particles: background
+  EXPECT_TRUE(white(ia.at(px(-0.5), px(0.5))));
+  // Moved particle: now at (-0.5, 0.5) in b, background at its old place.
+  EXPECT_FALSE(white(ib.at(px(-0.5), px(0.5))));
+  EXPECT_TRUE(white(ib.at(px(-0.5), px(0.0))));
+  // Time label (top left) and colour bar (right) drew something.
+  auto ink = [](const Image& im, int x0, int x1, int y0, int y1) {
+    int n = 0;
+    for (int x = x0; x < x1; ++x)
+      for (int y = y0; y < y1; ++y) n += !white(im.at(x, y));
+    return n;
+  };
+  EXPECT_GT(ink(ia, 0, 120, 270, 300), 20) << "time label";
+  EXPECT_GT(ink(ia, 252, 292, 30, 270), 200) << "colour bar";
+  EXPECT_GT(ink(ia, 0, 60, 0, 30), 10) << "scale bar";
+  std::filesystem::remove_all(dir);
+}
