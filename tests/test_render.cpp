@@ -58,21 +58,23 @@ TEST(Render, ParticlesAppearWhereProjectedInTheirColours) {
   render::render_png(window, view, field, {a}, "", 300, 300, pa);
   render::render_png(window, view, field, {b}, "", 300, 300, pb);
   const Image ia = read_png(pa), ib = read_png(pb);
-  ASSERT_EQ(ia.w, 300);
+  ASSERT_EQ(ia.w, 390);
   ASSERT_EQ(ia.h, 300);
-  // Parallel projection: scale = 1.16 x 1 + radius world units per half height.
-  const double scale = 1.16 + 0.08;
+  // Parallel projection: scale = 1.2 x 1 + radius world units per half height, the view shifted up by 4 % of
+  // it; the colour bar takes a column of max(90, w/4) = 90 px on the right: the panel is 300 x 300.
+  const double scale = 1.2 + 0.08;
   auto px = [&](double x) { return static_cast<int>(std::lround(150 + x / scale * 150)); };
+  auto py = [&](double y) { return static_cast<int>(std::lround(150 + (y - 0.04 * scale) / scale * 150)); };
   const int okabe[3][3] = {{230, 159, 0}, {86, 180, 233}, {0, 158, 115}};
   for (int k = 0; k < 3; ++k) {
-    const auto c = ia.at(px(a.xyz[3 * k]), px(0.0));
+    const auto c = ia.at(px(a.xyz[3 * k]), py(0.0));
     for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(c[ch], okabe[k][ch], 3) << "particle " << k << " channel " << ch;
   }
-  EXPECT_TRUE(white(ia.at(px(0.0), px(-0.6))));  // between particles: background
-  EXPECT_TRUE(white(ia.at(px(-0.5), px(0.5))));
+  EXPECT_TRUE(white(ia.at(px(0.0), py(-0.6))));  // between particles: background
+  EXPECT_TRUE(white(ia.at(px(-0.5), py(0.5))));
   // Moved particle: now at (-0.5, 0.5) in b, background at its old place.
-  EXPECT_FALSE(white(ib.at(px(-0.5), px(0.5))));
-  EXPECT_TRUE(white(ib.at(px(-0.5), px(0.0))));
+  EXPECT_FALSE(white(ib.at(px(-0.5), py(0.5))));
+  EXPECT_TRUE(white(ib.at(px(-0.5), py(0.0))));
   // Time label (top left) and colour bar (right) drew something.
   auto ink = [](const Image& im, int x0, int x1, int y0, int y1) {
     int n = 0;
@@ -81,7 +83,7 @@ TEST(Render, ParticlesAppearWhereProjectedInTheirColours) {
     return n;
   };
   EXPECT_GT(ink(ia, 0, 120, 270, 300), 20) << "time label";
-  EXPECT_GT(ink(ia, 252, 292, 30, 270), 200) << "colour bar";
+  EXPECT_GT(ink(ia, 300, 390, 30, 270), 200) << "colour bar";
   EXPECT_GT(ink(ia, 0, 60, 0, 30), 10) << "scale bar";
   std::filesystem::remove_all(dir);
 }

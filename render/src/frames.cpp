@@ -38,14 +38,13 @@ const double palette[8][3] = {{0.902, 0.624, 0.000}, {0.337, 0.706, 0.914}, {0.0
                               {0.941, 0.894, 0.259}, {0.000, 0.447, 0.698}, {0.835, 0.369, 0.000},
                               {0.800, 0.475, 0.655}, {0.600, 0.600, 0.600}};
 
-// Each splat drawn as a disc with a little shading toward its rim, so touching particles stay distinct.
+// Each splat drawn as a flat disc with a darker rim, so touching particles stay distinct (and flat colours
+// keep PNGs small).
 const char* disc_shader =
     "//VTK::Color::Impl\n"
     "float rr = dot(offsetVCVSOutput.xy, offsetVCVSOutput.xy);\n"
     "if (rr > 1.0) { discard; }\n"
-    "float shade = 1.0 - 0.35 * rr;\n"
-    "ambientColor *= shade;\n"
-    "diffuseColor *= shade;\n";
+    "if (rr > 0.64) { ambientColor *= 0.6; diffuseColor *= 0.6; }\n";
 
 vtkNew<vtkLookupTable> make_lut(const FieldSpec& f) {
   vtkNew<vtkLookupTable> lut;
@@ -87,7 +86,9 @@ void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, co
   vtkGenericOpenGLRenderWindow* win = hw.window();
   const int count = static_cast<int>(pics.size());
   const int title_h = title.empty() ? 0 : std::max(40, panel_h / 14);
-  const int width = panel_w * count, height = panel_h + title_h;
+  const int legend_w = std::max(90, panel_w / 4);  // the colour bar gets its own column
+  const int width = panel_w * count + legend_w, height = panel_h + title_h;
+  const double panels_right = static_cast<double>(panel_w * count) / width;
   win->SetSize(width, height);
   // Renderers from a previous call are removed: the window is reused for a whole sequence.
   win->GetRenderers()->RemoveAllItems();
@@ -128,7 +129,7 @@ void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, co
     actor->GetProperty()->SetDiffuse(0.0);
 
     vtkSmartPointer<vtkRenderer> ren = vtkSmartPointer<vtkRenderer>::New();
-    ren->SetViewport(static_cast<double>(k) / count, 0.0, static_cast<double>(k + 1) / count, top);
+    ren->SetViewport(panels_right * k / count, 0.0, panels_right * (k + 1) / count, top);
     ren->SetBackground(1.0, 1.0, 1.0);
     ren->AddActor(actor);
 
@@ -138,10 +139,12 @@ void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, co
     const double aspect = static_cast<double>(panel_w) / panel_h;
     vtkCamera* cam = ren->GetActiveCamera();
     cam->ParallelProjectionOn();
-    cam->SetFocalPoint(cx, cy, 0.0);
-    cam->SetPosition(cx, cy, 100.0);
+    // A wider margin at the top leaves room for the time label above a stretched body.
+    const double scale0 = 1.2 * std::max(hh, hw_ / aspect) + view.radius;
+    cam->SetFocalPoint(cx, cy + 0.04 * scale0, 0.0);
+    cam->SetPosition(cx, cy + 0.04 * scale0, 100.0);
     cam->SetViewUp(0, 1, 0);
-    cam->SetParallelScale(1.16 * std::max(hh, hw_ / aspect) + view.radius);
+    cam->SetParallelScale(scale0);
     cam->SetClippingRange(1.0, 200.0);
 
     // Time label and caption.
@@ -155,7 +158,7 @@ void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, co
 
     // Scale bar: 1 cm in world units at the lower left of the view.
     const double scale = cam->GetParallelScale();
-    const double x0 = cx - scale * aspect * 0.92, y0 = cy - scale * 0.94;
+    const double x0 = cx - scale * aspect * 0.92, y0 = cy + 0.04 * scale - scale * 0.94;
     vtkNew<vtkPoints> sp;
     sp->InsertNextPoint(x0, y0, 1.0);
     sp->InsertNextPoint(x0 + 1.0, y0, 1.0);
@@ -180,22 +183,31 @@ void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, co
     bar_text->GetPositionCoordinate()->SetValue(x0, y0 + 0.12, 1.0);
     ren->AddActor2D(bar_text);
 
-    if (k == count - 1) {  // one colour bar, on the right panel
-      vtkNew<vtkScalarBarActor> sb;
-      sb->SetLookupTable(lut);
-      sb->SetTitle(field.title.c_str());
-      sb->SetNumberOfLabels(field.categorical ? 8 : 5);
-      if (field.categorical) sb->SetLabelFormat("%.0f");
-      sb->SetOrientationToVertical();
-      sb->SetPosition(0.84, 0.1);
-      sb->SetWidth(0.13);
-      sb->SetHeight(0.8);
-      sb->GetTitleTextProperty()->SetColor(0.1, 0.1, 0.1);
-      sb->GetLabelTextProperty()->SetColor(0.1, 0.1, 0.1);
-      sb->GetTitleTextProperty()->SetFontSize(std::max(12, panel_h / 45));
-      sb->UnconstrainedFontSizeOn();
-      ren->AddActor2D(sb);
-    }
+    win->AddRenderer(ren);
+    keep.push_back(ren);
+  }
+  {  // the colour bar, in its own column right of the panels
+    vtkSmartPointer<vtkRenderer> ren = vtkSmartPointer<vtkRenderer>::New();
+    ren->SetViewport(panels_right, 0.0, 1.0, top);
+    ren->SetBackground(1.0, 1.0, 1.0);
+    vtkNew<vtkScalarBarActor> sb;
+    sb->SetLookupTable(lut);
+    sb->SetTitle(field.title.c_str());
+    sb->SetNumberOfLabels(field.categorical ? 8 : 5);
+    sb->SetLabelFormat(field.categorical ? "%.0f" : "%.3g");
+    sb->SetOrientationToVertical();
+    sb->SetPosition(0.08, 0.08);
+    sb->SetWidth(0.8);
+    sb->SetHeight(0.84);
+    sb->SetBarRatio(0.3);
+    sb->GetTitleTextProperty()->SetColor(0.1, 0.1, 0.1);
+    sb->GetLabelTextProperty()->SetColor(0.1, 0.1, 0.1);
+    sb->GetTitleTextProperty()->SetFontSize(std::max(12, panel_h / 45));
+    sb->GetLabelTextProperty()->SetFontSize(std::max(11, panel_h / 55));
+    sb->GetTitleTextProperty()->ItalicOff();
+    sb->GetLabelTextProperty()->ItalicOff();
+    sb->UnconstrainedFontSizeOn();
+    ren->AddActor2D(sb);
     win->AddRenderer(ren);
     keep.push_back(ren);
   }
