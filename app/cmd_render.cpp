@@ -11,7 +11,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
-#include <regex>
 #include <sstream>
 #include <stdexcept>
 
@@ -119,10 +118,16 @@ void run(const RenderCli& o) {
     }
   }
   std::string title;
-  {
+  {  // the scene's `title = "..."` line, if it has one
     const std::string text = rd.scene_text();
-    std::smatch m;
-    if (std::regex_search(text, m, std::regex("title\\s*=\\s*\"([^\"]*)\""))) title = m[1];
+    std::stringstream lines(text);
+    for (std::string line; std::getline(lines, line);) {
+      const auto start = line.find_first_not_of(" \t");
+      if (start == std::string::npos || line.compare(start, 5, "title") != 0) continue;
+      const auto q1 = line.find('"'), q2 = line.rfind('"');
+      if (q1 != std::string::npos && q2 > q1) title = line.substr(q1 + 1, q2 - q1 - 1);
+      break;
+    }
     if (title.empty()) title = o.dir;
   }
 
