@@ -73,7 +73,7 @@ class PairEffect final : public Effect<D> {
       detail::with_law(laws_, nphase_ == 1, [&](const auto& law) {
         if (spec_.model == PairModel::cutoff)  // the Verlet list of a lattice is a stencil too
           return list_stencil_.add_forces(s.x.front().data(), s.f.front().data(), law, cut2, inv_rmin_);
-        list_kernel<false>(s, law.with_ids(list_.law.data()));
+        contact_kernel(s, law.with_ids(list_.law.data()));
         return 0L;
       });
     }
@@ -136,11 +136,10 @@ class PairEffect final : public Effect<D> {
                      static_cast<std::size_t>(phase_[static_cast<std::size_t>(b)])];
   }
 
-  // Neighbour-list pairs: the cutoff model's every pair within D, or the bonded model's contacts (the
-  // law's repulsive branch, r < r0). A select, not a branch, decides whether a pair acts, so it vectorizes.
-  template <bool cutoff_model, class Law>
-  void list_kernel(State<D>& s, const Law law) {
-    const double cut2 = cutoff_ * cutoff_;
+  // The bonded model's contacts: unbonded pairs closer than r0 feel the law's repulsive branch. A select,
+  // not a branch, decides whether a pair acts, so it vectorizes.
+  template <class Law>
+  void contact_kernel(State<D>& s, const Law law) {
     const long m = static_cast<long>(list_.size());
     const double inv_rmin = inv_rmin_;
     const int* __restrict pi = list_.i.data();
@@ -161,13 +160,8 @@ class PairEffect final : public Effect<D> {
         const double d0 = x[a] - x[b], d1 = x[a + 1] - x[b + 1];
         const double d2 = D == 3 ? x[a + D - 1] - x[b + D - 1] : 0.0;
         const double r2 = d0 * d0 + d1 * d1 + d2 * d2;
-        bool act;
-        if constexpr (cutoff_model) {
-          act = r2 <= cut2;
-        } else {
-          const double rc = reach[lid[u]];
-          act = r2 < rc * rc;
-        }
+        const double rc = reach[lid[u]];
+        const bool act = r2 < rc * rc;
         const double inv = 1.0 / std::sqrt(r2);
         const double ie = std::min(inv, inv_rmin);  // force held constant inside r_min (Sec. 4.2)
         const double mag = law.magnitude(u, ie) * inv;  // > 0 repulsive
