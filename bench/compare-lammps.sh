@@ -50,6 +50,18 @@ for scene in slit_plate_7_14 block3d_slit; do
   done
 done
 
+# Only what a scene declares is computed: the plate with pair + kinematic, and with every effect declared.
+effects_rate() {
+  for _ in 1 2 3; do
+    "$pmfrag" run cases/slit_plate_7_14.toml --out "$work/effects" --force -q --set time.end=2e-3 --set output.every=1 "$@" \
+      > /dev/null
+    sed -n 's/.*"particle_steps_per_s": *\([0-9.e+-]*\).*/\1/p' "$work/effects/run.json"
+  done | median3
+}
+only=$(effects_rate)
+every=$(effects_rate --set 'gravity.g=[0,-980]' --set damping.gamma=1.0 --set greenspan_alpha.enabled=true)
+echo "effects: pair + kinematic $only particle-steps/s; + gravity, damping, greenspan_alpha $every (2 threads)"
+
 # The paper's Fig. 6 run, whole: 0 to 1.03e-2 s, 103,000 steps, both cores.
 for _ in 1 2 3; do
   TIMEFORMAT=%R
