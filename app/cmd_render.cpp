@@ -155,7 +155,7 @@ void run(const RenderCli& o) {
     if (want_frame) {
       char name[32];
       std::snprintf(name, sizeof name, "frame_%05ld.png", k);
-      render::render_png(window, view, spec, {pic}, "", o.size, o.size, (frames_dir / name).string());
+      render::render_png(window, view, spec, {pic}, "", o.size, o.size, (frames_dir / name).string(), 1);
       ++rendered;
     }
     for (std::size_t j = 0; j < panel_frames.size(); ++j)

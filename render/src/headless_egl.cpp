@@ -77,6 +77,7 @@ HeadlessWindow::HeadlessWindow(int width, int height) : impl_(std::make_unique<I
   m.window->AddObserver(vtkCommand::WindowMakeCurrentEvent, m.make_current);
   m.window->AddObserver(vtkCommand::WindowIsCurrentEvent, m.is_current);
   m.window->AddObserver(vtkCommand::WindowSupportsOpenGLEvent, m.supports);
+  m.window->SetMultiSamples(0);  // software rasterization: multisampling would multiply the fragment work
   m.window->SetSize(width, height);
   m.window->SetOffScreenRendering(1);
   m.window->InitializeFromCurrentContext();
