@@ -417,30 +417,7 @@ std::string read_string(hid_t file, const char* path) {
 }
 }  // namespace
 
-std::string H5mdReader::scene_file() const { return read_string(file_, "/parameters/scene_file"); }
-std::vector<std::string> H5mdReader::overrides() const {
-  std::vector<std::string> out;
-  std::string line;
-  for (char c : read_string(file_, "/parameters/overrides")) {
-    if (c == '\n') {
-      if (!line.empty()) out.push_back(line);
-      line.clear();
-    } else {
-      line += c;
-    }
-  }
-  if (!line.empty()) out.push_back(line);
-  return out;
-}
-
-std::string H5mdReader::scene_text() const {
-  hid_t d = H5Dopen2(file_, "/parameters/scene", H5P_DEFAULT);
-  hid_t type = H5Dget_type(d);
-  std::string s(H5Tget_size(type), '\0');
-  check(H5Dread(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, s.data()), "scene");
-  H5Tclose(type), H5Dclose(d);
-  return s;
-}
+std::string H5mdReader::scene_text() const { return read_string(file_, "/parameters/scene"); }
 
 void write_checkpoint(const std::string& path, const Checkpoint& c) {
   const std::string tmp = path + ".tmp";

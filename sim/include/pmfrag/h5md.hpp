@@ -68,8 +68,6 @@ class H5mdReader {
   std::vector<PairLaw> laws() const;
   std::vector<int> phase_pair_law() const;
   std::string scene_text() const;
-  std::string scene_file() const;
-  std::vector<std::string> overrides() const;
 
  private:
   long long file_ = -1;
