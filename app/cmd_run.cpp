@@ -47,7 +47,6 @@ void run(const RunCli& o) {
   if (!o.resume.empty() && !o.scene.empty()) throw UsageError("--resume: takes the run folder only, not a scene");
   RunOptions ro;
   ro.out_dir = o.resume.empty() ? o.out : o.resume;
-  ro.overrides = o.set;
   ro.allow_unstable = o.allow_unstable;
   ro.force = o.force;
   if (!o.quiet) ro.log = [](const std::string& line) { std::fprintf(stderr, "pmfrag: %s\n", line.c_str()); };

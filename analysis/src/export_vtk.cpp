@@ -194,15 +194,7 @@ ExportResult export_vtk(const std::string& run_dir, const ExportOptions& opt) {
   st.laws = rd.laws();
   st.pair_law = rd.phase_pair_law();
   st.nphase = static_cast<std::size_t>(std::lround(std::sqrt(static_cast<double>(st.pair_law.size()))));
-  int p = 0, q = 0;
-  double threshold = rd.parameter("cutoff");
-  if (opt.criterion.kind == BreakCriterion::Kind::factor) threshold = opt.criterion.factor * st.r0;
-  if (opt.criterion.kind == BreakCriterion::Kind::damage) {
-    if (st.laws.size() != 1) throw std::runtime_error("--break rd needs a single-phase trajectory");
-    threshold = st.laws.front().damage_spacing();
-  }
-  (void)p, (void)q;
-  FragmentTracker tracker(st.n, st.bonds, st.mass, st.dim, threshold);
+  FragmentTracker tracker(st.n, st.bonds, st.mass, st.dim, break_length(rd, opt.criterion));
   fs::create_directories(dir / "vtk");
   ExportResult res;
   std::vector<std::pair<double, std::string>> written;

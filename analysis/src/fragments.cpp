@@ -132,25 +132,6 @@ std::vector<Fragment> describe_fragments(const FrameLabels& l, const TrajectoryF
   return out;
 }
 
-double law_threshold(const H5mdReader& rd, const BreakCriterion& c, int& p, int& q) {
-  const double r0 = rd.parameter("r0");
-  p = q = 0;
-  try {
-    p = static_cast<int>(rd.parameter("p"));
-    q = static_cast<int>(rd.parameter("q"));
-  } catch (const std::exception&) {  // several phases: no single (p,q)
-  }
-  switch (c.kind) {
-    case BreakCriterion::Kind::cutoff: return rd.parameter("cutoff");
-    case BreakCriterion::Kind::factor: return c.factor * r0;
-    case BreakCriterion::Kind::damage: {
-      if (p == 0) throw std::runtime_error("--break rd needs a single-phase trajectory (one damage spacing)");
-      return PairLaw{p, q, rd.parameter("G"), rd.parameter("H")}.damage_spacing();
-    }
-  }
-  return 0.0;
-}
-
 template <class F>
 void write_atomically(const std::filesystem::path& path, F&& body) {
   const std::filesystem::path tmp = path.string() + ".tmp";
@@ -166,10 +147,25 @@ void write_atomically(const std::filesystem::path& path, F&& body) {
 
 }  // namespace
 
+double break_length(const H5mdReader& rd, const BreakCriterion& c) {
+  switch (c.kind) {
+    case BreakCriterion::Kind::cutoff: return rd.parameter("cutoff");
+    case BreakCriterion::Kind::factor: return c.factor * rd.parameter("r0");
+    case BreakCriterion::Kind::damage: {
+      const auto laws = rd.laws();
+      if (laws.size() != 1) throw std::runtime_error("--break rd needs a single-phase trajectory (one damage spacing)");
+      return laws.front().damage_spacing();
+    }
+  }
+  return 0.0;
+}
+
 FragmentReport analyse_fragments(const std::string& trajectory, const BreakCriterion& criterion) {
   H5mdReader rd(trajectory);
   FragmentReport rep;
-  rep.threshold_cm = law_threshold(rd, criterion, rep.p, rep.q);
+  rep.threshold_cm = break_length(rd, criterion);
+  const auto laws = rd.laws();
+  if (laws.size() == 1) rep.p = laws.front().p, rep.q = laws.front().q;  // several phases: no single (p,q)
   rep.criterion = criterion.describe();
   const auto mass = rd.mass();
   for (double m : mass) rep.total_mass += m;

@@ -15,6 +15,19 @@
 
 namespace pmfrag::detail {
 
+/// F(r)/r of one bond (> 0 repulsive), 0 if the bond is gone or longer than sqrt(cut2); counts in `broke` a
+/// live bond found too long (broken for good the first time it exceeds D: the caller retires it).
+/// Branch-free, so the loops calling it vectorize.
+template <class Law>
+inline double bond_force_over_r(const Law& law, std::size_t k, double r2, bool live, double cut2, double inv_rmin,
+                                long& broke) {
+  const bool within = r2 <= cut2;
+  broke += live & !within;
+  const double inv = 1.0 / std::sqrt(live ? r2 : cut2);  // no bond here: keep the arithmetic finite
+  const double ie = std::min(inv, inv_rmin);             // force held constant inside r_min (Sec. 4.2)
+  return (live & within) ? law.magnitude(k, ie) * inv : 0.0;
+}
+
 template <int D>
 class BondStencil {
  public:
@@ -127,12 +140,7 @@ class BondStencil {
       const std::size_t i = static_cast<std::size_t>(p);
       const double d0 = x0[i] - x0[i + o], d1 = x1[i] - x1[i + o];
       const double d2 = D == 3 ? x2[i] - x2[i + o] : 0.0;
-      const double r2 = d0 * d0 + d1 * d1 + d2 * d2;
-      const bool live = alive[i] != 0, within = r2 <= cut2;
-      broke += live & !within;  // broken for good the first time it exceeds D: the caller retires it
-      const double inv = 1.0 / std::sqrt(live ? r2 : cut2);  // no bond here: keep the arithmetic finite
-      const double ie = std::min(inv, inv_rmin);  // force held constant inside r_min (Sec. 4.2)
-      const double fr = (live & within) ? law.magnitude(i, ie) * inv : 0.0;  // > 0 repulsive
+      const double fr = bond_force_over_r(law, i, d0 * d0 + d1 * d1 + d2 * d2, alive[i] != 0, cut2, inv_rmin, broke);
       F0[i] = fr * d0;
       F1[i] = fr * d1;
       if constexpr (D == 3) F2[i] = fr * d2;
@@ -151,12 +159,7 @@ class BondStencil {
       const std::size_t a = static_cast<std::size_t>(pi[u]), b = static_cast<std::size_t>(pj[u]);
       const double d0 = xs_[0][a] - xs_[0][b], d1 = xs_[1][a] - xs_[1][b];
       const double d2 = D == 3 ? xs_[D - 1][a] - xs_[D - 1][b] : 0.0;
-      const double r2 = d0 * d0 + d1 * d1 + d2 * d2;
-      const bool live = alive[u] != 0, within = r2 <= cut2;
-      broke += live & !within;
-      const double inv = 1.0 / std::sqrt(live ? r2 : cut2);
-      const double ie = std::min(inv, inv_rmin);
-      const double fr = (live & within) ? law.magnitude(u, ie) * inv : 0.0;
+      const double fr = bond_force_over_r(law, u, d0 * d0 + d1 * d1 + d2 * d2, alive[u] != 0, cut2, inv_rmin, broke);
       sparse_.force[0][u] = fr * d0;
       sparse_.force[1][u] = fr * d1;
       if constexpr (D == 3) sparse_.force[D - 1][u] = fr * d2;

@@ -142,6 +142,10 @@ void write_law(hid_t g, const PairLaw& law, double mass) {
 
 }  // namespace
 
+// The time series under /observables, all in erg except the pair count.
+const char* const observable_names[] = {"kinetic_energy", "potential_energy", "total_energy", "boundary_work",
+                                        "bond_break_energy", "energy_balance", "pairs_beyond_cutoff"};
+
 struct H5mdWriter::Impl {
   hid_t file = -1;
   hid_t particles = -1;
@@ -150,8 +154,7 @@ struct H5mdWriter::Impl {
   hid_t obs_group = -1;
 };
 
-H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& scene, const RunParameters& run,
-                       const std::vector<std::string>& overrides)
+H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& scene, const RunParameters& run)
     : impl_(std::make_unique<Impl>()) {
   auto& m = *impl_;
   // Created under a temporary name and renamed once its metadata is on disk: a trajectory.h5 that exists
@@ -213,19 +216,17 @@ H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& 
   H5Gclose(conn);
 
   m.obs_group = make_group(m.file, "observables");
-  for (const char* name : {"kinetic_energy", "potential_energy", "total_energy", "boundary_work", "bond_break_energy",
-                           "energy_balance"}) {
+  for (const char* name : observable_names) {
     m.observables.emplace(name, Series(m.obs_group, name, {}, H5T_NATIVE_DOUBLE));
-    string_attribute(m.observables[name].value, "unit", "erg");
+    if (std::string(name) != "pairs_beyond_cutoff") string_attribute(m.observables[name].value, "unit", "erg");
   }
-  m.observables.emplace("pairs_beyond_cutoff", Series(m.obs_group, "pairs_beyond_cutoff", {}, H5T_NATIVE_DOUBLE));
 
   hid_t par = make_group(m.file, "parameters");
-  string_dataset(par, "scene", scene.text);
+  string_dataset(par, "scene", scene.recorded_text());
   string_dataset(par, "scene_file", scene.file);
   {
     std::string joined;
-    for (const auto& o : overrides) joined += o + "\n";
+    for (const auto& o : scene.overrides) joined += o + "\n";
     string_dataset(par, "overrides", joined);
   }
   scalar_dataset(par, "dt", run.dt);
@@ -270,9 +271,7 @@ H5mdWriter::H5mdWriter(const std::string& path, long keep_frames) : impl_(std::m
   m.position = Series::reopen(m.particles, "position", H5T_NATIVE_DOUBLE, keep);
   m.velocity = Series::reopen(m.particles, "velocity", H5T_NATIVE_DOUBLE, keep);
   m.obs_group = checked(H5Gopen2(m.file, "/observables", H5P_DEFAULT), "observables");
-  for (const char* name : {"kinetic_energy", "potential_energy", "total_energy", "boundary_work", "bond_break_energy",
-                           "energy_balance", "pairs_beyond_cutoff"})
-    m.observables.emplace(name, Series::reopen(m.obs_group, name, H5T_NATIVE_DOUBLE, keep));
+  for (const char* name : observable_names) m.observables.emplace(name, Series::reopen(m.obs_group, name, H5T_NATIVE_DOUBLE, keep));
   frames_ = keep_frames;
   H5Fflush(m.file, H5F_SCOPE_GLOBAL);
 }

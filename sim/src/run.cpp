@@ -48,14 +48,13 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
     fs::remove(dir / "run.json");
     fs::remove(ckpt);
     // The scene as read and its overrides, beside the trajectory, so --resume needs nothing else.
-    const auto mark = scene.text.find("\n# --set overrides applied:\n");
-    std::ofstream(dir / "scene.toml") << (mark == std::string::npos ? scene.text : scene.text.substr(0, mark));
+    std::ofstream(dir / "scene.toml") << scene.source;
     std::ofstream ov(dir / "overrides.txt");
     ov << "# source: " << scene.file << "\n";
-    for (const auto& o : opt.overrides) ov << o << "\n";
+    for (const auto& o : scene.overrides) ov << o << "\n";
   }
   std::unique_ptr<H5mdWriter> writer_ptr = from ? std::make_unique<H5mdWriter>(traj.string(), from->frames)
-                                                : std::make_unique<H5mdWriter>(traj.string(), sys, scene, rp, opt.overrides);
+                                                : std::make_unique<H5mdWriter>(traj.string(), sys, scene, rp);
   H5mdWriter& writer = *writer_ptr;
 
   Leapfrog<D> lf(sys, make_effects<D>(sys, scene), dt);
@@ -212,7 +211,6 @@ RunResult resume_run(const RunOptions& opt) {
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const Scene scene = parse_scene(text, file, overrides);
   RunOptions o = opt;
-  o.overrides = overrides;
   if (!fs::exists(ckpt)) {
     if (o.log) o.log("no checkpoint in " + dir.string() + ": starting over");
     o.force = true;

@@ -361,11 +361,8 @@ Scene parse_scene(const std::string& text, const std::string& file, const std::v
 
   Scene sc;
   sc.file = file;
-  sc.text = text;
-  if (!overrides.empty()) {
-    sc.text += "\n# --set overrides applied:\n";
-    for (const auto& o : overrides) sc.text += "# " + o + "\n";
-  }
+  sc.source = text;
+  sc.overrides = overrides;
   Tab top(doc, "", file);
   sc.title = top.string("title", "");
 
@@ -512,6 +509,15 @@ Scene parse_scene(const std::string& text, const std::string& file, const std::v
   }
   top.done();
   return sc;
+}
+
+std::string Scene::recorded_text() const {
+  std::string t = source;
+  if (!overrides.empty()) {
+    t += "\n# --set overrides applied:\n";
+    for (const auto& o : overrides) t += "# " + o + "\n";
+  }
+  return t;
 }
 
 Scene read_scene(const std::string& path, const std::vector<std::string>& overrides) {

@@ -23,8 +23,7 @@ struct RunParameters {
 class H5mdWriter {
  public:
   /// Creates `path` (truncating it) and writes everything time-independent.
-  H5mdWriter(const std::string& path, const System& sys, const Scene& scene, const RunParameters& run,
-             const std::vector<std::string>& overrides = {});
+  H5mdWriter(const std::string& path, const System& sys, const Scene& scene, const RunParameters& run);
   /// Reopens an existing trajectory to append, keeping its first `keep_frames` frames (resume).
   H5mdWriter(const std::string& path, long keep_frames);
   ~H5mdWriter();

@@ -20,7 +20,6 @@ struct RunOptions {
   std::string out_dir;
   bool allow_unstable = false;  ///< run even if dt exceeds the Eq. 15 limit
   bool force = false;           ///< overwrite an existing trajectory
-  std::vector<std::string> overrides;  ///< the --set items the scene was read with (stored for --resume)
   std::function<void(const std::string&)> log;         ///< one line of information
   std::function<void(const Progress&)> progress;       ///< called every ~0.2 s of wall time
 };

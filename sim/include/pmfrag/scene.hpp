@@ -95,7 +95,10 @@ struct OutputSpec {
 
 struct Scene {
   std::string file;  ///< where it was read from (for messages)
-  std::string text;  ///< the scene text as read, with --set overrides applied
+  std::string source;                  ///< the scene text as read
+  std::vector<std::string> overrides;  ///< the --set items applied on top of it (kept for --resume)
+  /// The text as read with the overrides appended as comments: what a trajectory records.
+  std::string recorded_text() const;
   std::string title;
   int dim = 2;
   std::vector<BodySpec> bodies;

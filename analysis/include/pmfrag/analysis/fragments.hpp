@@ -9,6 +9,10 @@
 #include <string>
 #include <vector>
 
+namespace pmfrag {
+class H5mdReader;
+}
+
 namespace pmfrag::analysis {
 
 /// When a bond counts as broken: longer than D (the interaction distance, default), than the damage
@@ -78,6 +82,9 @@ class FragmentTracker {
   std::vector<std::uint8_t> broken_;
   long count_ = 0;
 };
+
+/// The bond length [cm] beyond which a bond of this trajectory counts as broken.
+double break_length(const H5mdReader& trajectory, const BreakCriterion& criterion);
 
 /// Reads RUN_DIR/trajectory.h5 and analyses every frame.
 FragmentReport analyse_fragments(const std::string& trajectory, const BreakCriterion& criterion);
