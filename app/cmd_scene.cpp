@@ -47,7 +47,7 @@ void write_lammps(const std::string& path, const Scene& sc, const System& sys) {
   std::ofstream par(path + ".params");
   par.precision(17);
   const PairLaw& law = sys.laws.front();
-  const double dt = sc.time.auto_dt ? sc.time.safety * system_dt_limit(sys) : sc.time.dt;
+  const double dt = choose_step(sc, sys).dt;
   par << law.p << " " << law.q << " " << law.G << " " << law.H << " " << sys.phase_mass.front() << " " << sys.r0 << " "
       << sys.cutoff << " " << dt << " " << sys.dim << "\n";
 }
@@ -65,7 +65,13 @@ void run(const SceneCli& o) {
     std::printf("phase %-10s (p,q) = (%d,%d)  G = %.6e  H = %.6e  mass = %.6g g\n", sys.phase_names[k].c_str(), l.p, l.q,
                 l.G, l.H, sys.phase_mass[k]);
   }
-  std::printf("Eq. 15 limit: %.4e s\n", system_dt_limit(sys));
+  const StepChoice step = choose_step(sc, sys);
+  std::printf("stability limit: %.4e s = Eq. 15 %.4e s%s x lattice factor %.4f (bulk lattices: triangular 1/sqrt(6) = 0.408, fcc 1/sqrt(8) = 0.354)\n",
+              step.limit, step.pair_limit, sys.r_min > 0 ? " at r_min" : "", step.lattice_factor);
+  if (step.adaptive)
+    std::printf("dt: adaptive, at most %.4e s\n", step.dt);
+  else
+    std::printf("dt: %.4e s (%.3f x the limit)\n", step.dt, step.dt / step.limit);
   std::string effects;
   if (sys.dim == 2)
     for (const auto& e : make_effects<2>(sys, sc)) effects += (effects.empty() ? "" : ", ") + e->name();

@@ -194,7 +194,7 @@ namespace {
 std::vector<double> final_state(const Scene& sc, int threads, long steps) {
   omp_set_num_threads(threads);
   const System sys = build_system(sc);
-  const double dt = sc.time.auto_dt ? sc.time.safety * system_dt_limit(sys) : sc.time.dt;
+  const double dt = choose_step(sc, sys).dt;
   auto lf = test::make_leapfrog<2>(sys, sc, dt);
   for (long k = 0; k < steps; ++k) lf.step();
   std::vector<double> out;
@@ -224,9 +224,10 @@ TEST(Dynamics, GuardRefusesAStepAboveTheLimit) {
   ro.out_dir = test::temp_dir("guard").string();
   try {
     (void)run_scene(sc, ro);
-    FAIL() << "dt = 1e-6 s is above the (7,14) limit of 8.3e-7 s";
+    FAIL() << "dt = 1e-6 s is above the (7,14) plate's limit of 3.4e-7 s";
   } catch (const UnstableStepError& e) {
-    EXPECT_NE(std::string(e.what()).find("8.285e-07"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("3.386e-07"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("lattice factor 0.409"), std::string::npos) << e.what();
   }
   // Forced through, the guard stops it and names the particle and step; the frames written so far stay.
   ro.allow_unstable = true;

@@ -85,7 +85,7 @@ TEST(Scene, EveryShippedCaseRunsAFewSteps) {
     if (entry.path().extension() != ".toml") continue;
     Scene sc = read_scene(entry.path().string());
     const System sys = build_system(sc);
-    const double dt = sc.time.auto_dt ? sc.time.safety * system_dt_limit(sys) : sc.time.dt;
+    const double dt = choose_step(sc, sys).dt;
     sc.time.end = 5 * dt;
     sc.output.every = dt;
     RunOptions ro;
@@ -111,7 +111,7 @@ TEST(Scene, ErrorsNameFileLineAndKey) {
   EXPECT_EQ(error_of(m), "");
   EXPECT_EQ(error_of(m + "frobnicate = 1\n"), "bad.toml:12: key 'time.frobnicate': unknown key");
   EXPECT_EQ(error_of("frobnicate = 1" + m), "bad.toml:1: key 'frobnicate': unknown key");
-  EXPECT_EQ(error_of(with("dt = 1e-7", "dt = \"fast\"")), "bad.toml:10: key 'time.dt': expected a step in seconds or \"auto\"");
+  EXPECT_EQ(error_of(with("dt = 1e-7", "dt = \"fast\"")), "bad.toml:10: key 'time.dt': expected a step in seconds, \"auto\" or \"adaptive\" (got \"fast\")");
   EXPECT_EQ(error_of(with("dt = 1e-7", "dt = -1e-7")), "bad.toml:10: key 'time.dt': must be positive (got -0.000000)");
   EXPECT_EQ(error_of(with("dt = 1e-7", "dt = nan")), "bad.toml:10: key 'time.dt': must be finite (got nan)");
   EXPECT_EQ(error_of(with("end = 1e-6\n", "")), "bad.toml:9: key 'time.end': missing (required)");

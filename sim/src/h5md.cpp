@@ -233,6 +233,7 @@ H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& 
   scalar_dataset(par, "dt_limit", run.dt_limit);
   scalar_dataset(par, "end", run.end);
   scalar_dataset(par, "frame_every_steps", static_cast<double>(run.frame_every));
+  scalar_dataset(par, "dt_adaptive", run.adaptive ? 1.0 : 0.0);
   scalar_dataset(par, "r0", sys.r0);
   scalar_dataset(par, "cutoff", sys.cutoff);
   scalar_dataset(par, "r_min", sys.r_min);
@@ -424,6 +425,7 @@ void write_checkpoint(const std::string& path, const Checkpoint& c) {
   if (f < 0) throw std::runtime_error(tmp + ": cannot write checkpoint");
   array_dataset<long>(f, "step", {c.step}, {});
   array_dataset<long>(f, "frames", {c.frames}, {});
+  array_dataset(f, "time_dt_level_calm", std::vector<double>{c.time, c.dt, double(c.level), double(c.calm)}, {4});
   array_dataset(f, "position", c.position, {c.position.size()});
   array_dataset(f, "velocity", c.velocity, {c.velocity.size()});
   array_dataset(f, "effects", c.effects, {c.effects.size()});
@@ -439,6 +441,8 @@ Checkpoint read_checkpoint(const std::string& path) {
   try {
     c.step = read_all<long>(f, "step").at(0);
     c.frames = read_all<long>(f, "frames").at(0);
+    const auto td = read_all<double>(f, "time_dt_level_calm");
+    c.time = td.at(0), c.dt = td.at(1), c.level = static_cast<int>(td.at(2)), c.calm = static_cast<int>(td.at(3));
     c.position = read_all<double>(f, "position");
     c.velocity = read_all<double>(f, "velocity");
     c.effects = read_all<double>(f, "effects");

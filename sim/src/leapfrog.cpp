@@ -1,13 +1,15 @@
 #include "pmfrag/leapfrog.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace pmfrag {
 
 template <int D>
-Leapfrog<D>::Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>> effects, double dt)
-    : effects_(std::move(effects)) {
+Leapfrog<D>::Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>> effects, double dt, bool adaptive)
+    : effects_(std::move(effects)), uniform_(!adaptive) {
   const std::size_t n = sys.size();
   s_.dt = dt;
   s_.r0 = sys.r0;
@@ -27,6 +29,7 @@ Leapfrog<D>::Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>>
     if (st & stage::force) force_.push_back(e.get());
     if (st & stage::after_move) after_move_.push_back(e.get());
     if (st & stage::observe) observe_.push_back(e.get());
+    if (st & stage::step_limit) step_limit_.push_back(e.get());
   }
   for (auto& e : effects_)
     if (e->stages() & stage::setup) e->setup(s_);
@@ -40,13 +43,20 @@ void Leapfrog<D>::compute_forces(bool zeroed) {
 }
 
 template <int D>
-void Leapfrog<D>::step() {
+double Leapfrog<D>::step_limit() const {
+  double limit = std::numeric_limits<double>::infinity();
+  for (auto* e : step_limit_) limit = std::min(limit, e->step_limit(s_));
+  return limit;
+}
+
+template <int D>
+void Leapfrog<D>::step(double dt) {
   const long n = static_cast<long>(s_.size());
-  const double dt = s_.dt;
+  if (dt != s_.dt) uniform_ = false;
   // Eq. (12): V_1/2 = V_0 + (dt/2) a_0;  Eq. (13): V_k+1/2 = V_k-1/2 + dt a_k;  Eq. (14): r_k+1 = r_k + dt V_k+1/2.
   // One pass; the guard counts moves longer than r0/2 (or not finite) and the largest move feeds the
   // neighbour lists' displacement bound.
-  const double h = s_.step == 0 ? 0.5 * dt : dt;
+  const double h = s_.step == 0 ? 0.5 * dt : 0.5 * (s_.dt + dt);  // == dt exactly for equal steps
   const double limit2 = 0.25 * s_.r0 * s_.r0;
   long bad = 0;
   double max2 = 0.0;
@@ -78,6 +88,8 @@ void Leapfrog<D>::step() {
     }
   }
   ++s_.step;
+  s_.dt = dt;
+  s_.t = uniform_ ? static_cast<double>(s_.step) * dt : s_.t + dt;
   const double max_step = std::sqrt(max2);
   for (auto* e : after_move_) e->after_move(s_, max_step);
   compute_forces(true);
@@ -117,11 +129,13 @@ std::vector<double> Leapfrog<D>::effect_state() const {
 }
 
 template <int D>
-void Leapfrog<D>::restore(long step, const std::vector<double>& x, const std::vector<double>& v,
+void Leapfrog<D>::restore(long step, double time, double dt, const std::vector<double>& x, const std::vector<double>& v,
                           const std::vector<double>& effects) {
   if (x.size() != s_.size() * D || v.size() != x.size())
     throw std::runtime_error("checkpoint does not match the scene (particle count or dimension)");
   s_.step = step;
+  s_.t = time;  // for uniform steps the checkpoint holds exactly step x dt
+  s_.dt = dt;
   for (std::size_t i = 0; i < s_.size(); ++i)
     for (int d = 0; d < D; ++d) s_.x[i][d] = x[i * D + d], s_.v[i][d] = v[i * D + d];
   std::vector<double> probe;

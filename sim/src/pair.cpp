@@ -8,6 +8,7 @@
 #include "bond_stencil.hpp"
 #include "pair_kernels.hpp"
 #include "pmfrag/effects.hpp"
+#include "pmfrag/material.hpp"
 #include "pmfrag/neighbors.hpp"
 
 #include <algorithm>
@@ -43,12 +44,18 @@ class PairEffect final : public Effect<D> {
     for (std::size_t l = 0; l < laws_.size(); ++l) contact_reach_[l] = laws_[l].equilibrium_spacing();
     max_reach_ = spec_.model == PairModel::cutoff ? cutoff_ : *std::max_element(contact_reach_.begin(), contact_reach_.end());
     skin_ = 0.3 * sys.r0;
+    law_mass_.assign(laws_.size(), std::numeric_limits<double>::infinity());
+    for (std::size_t a = 0; a < nphase_; ++a)
+      for (std::size_t b = 0; b < nphase_; ++b) {
+        double& m = law_mass_[static_cast<std::size_t>(pair_law_[a * nphase_ + b])];
+        m = std::min({m, sys.phase_mass[a], sys.phase_mass[b]});
+      }
     uses_list_ = spec_.model == PairModel::cutoff || spec_.contact;
   }
 
   std::string name() const override { return spec_.model == PairModel::bonded ? "pair (bonded)" : "pair (cutoff)"; }
   unsigned stages() const override {
-    return stage::setup | stage::force | stage::observe | (uses_list_ ? stage::after_move : 0u);
+    return stage::setup | stage::force | stage::observe | stage::step_limit | (uses_list_ ? stage::after_move : 0u);
   }
 
   void setup(State<D>& s) override {
@@ -66,7 +73,7 @@ class PairEffect final : public Effect<D> {
       });
       if (broke > 0) {
         retire_broken(s);
-        if (first_break_step_ < 0) first_break_step_ = s.step;
+        if (first_break_step_ < 0) first_break_step_ = s.step, first_break_time_ = s.time();
       }
     }
     if (uses_list_ && list_.size() > 0) {
@@ -81,10 +88,12 @@ class PairEffect final : public Effect<D> {
 
   void save(std::vector<double>& out) const override {
     out.push_back(static_cast<double>(first_break_step_));
+    out.push_back(first_break_time_);
     for (std::size_t b = 0; b < alive_.size(); ++b) out.push_back(alive_[b]), out.push_back(phi_break_[b]);
   }
   void load(const double*& in) override {
     first_break_step_ = static_cast<long>(*in++);
+    first_break_time_ = *in++;
     for (std::size_t b = 0; b < alive_.size(); ++b) {
       alive_[b] = static_cast<std::uint8_t>(*in++);
       phi_break_[b] = *in++;
@@ -127,8 +136,51 @@ class PairEffect final : public Effect<D> {
     o.pairs_beyond_cutoff += beyond;
   }
 
+  // Eq. (15) at the closest approach of the pairs that act now, per law: the stiffness -dF/dr grows as a
+  // pair is pressed below r0 and is constant (zero) inside r_min, and for stretched pairs it is largest at
+  // r0, so each law's closest distance is clamped to [r_min, r_eq]. One extra pass over the pairs per step.
+  double step_limit(const State<D>& s) const override {
+    const int nl = static_cast<int>(laws_.size());
+    std::vector<double> close2(laws_.size(), std::numeric_limits<double>::infinity());
+    double* c2 = close2.data();
+    const double* x = s.x.front().data();
+    const double cut2 = cutoff_ * cutoff_;
+    auto r2_of = [x](int i, int j) {
+      const std::size_t a = static_cast<std::size_t>(i) * D, b = static_cast<std::size_t>(j) * D;
+      double r2 = 0.0;
+      for (int d = 0; d < D; ++d) r2 += (x[a + d] - x[b + d]) * (x[a + d] - x[b + d]);
+      return r2;
+    };
+    if (spec_.model == PairModel::bonded) {
+      const long nb = static_cast<long>(bi_.size());
+#pragma omp parallel for schedule(static) reduction(min : c2[:nl])
+      for (long b = 0; b < nb; ++b) {
+        const std::size_t u = static_cast<std::size_t>(b);
+        if (alive_[u]) c2[blaw_[u]] = std::min(c2[blaw_[u]], r2_of(bi_[u], bj_[u]));
+      }
+    }
+    const long np = static_cast<long>(list_.size());
+#pragma omp parallel for schedule(static) reduction(min : c2[:nl])
+    for (long p = 0; p < np; ++p) {
+      const std::size_t u = static_cast<std::size_t>(p);
+      const int l = list_.law[u];
+      const double r2 = r2_of(list_.i[u], list_.j[u]);
+      const double reach = spec_.model == PairModel::cutoff ? cut2 : contact_reach_[static_cast<std::size_t>(l)] *
+                                                                         contact_reach_[static_cast<std::size_t>(l)];
+      if (r2 < reach) c2[l] = std::min(c2[l], r2);
+    }
+    double limit = std::numeric_limits<double>::infinity();
+    for (std::size_t l = 0; l < laws_.size(); ++l) {
+      if (!std::isfinite(close2[l])) continue;
+      const double r = std::clamp(std::sqrt(close2[l]), r_min_, laws_[l].equilibrium_spacing());
+      limit = std::min(limit, dt_limit(laws_[l], law_mass_[l], r));
+    }
+    return limit;
+  }
+
   const std::vector<std::uint8_t>& alive() const { return alive_; }
   long first_break_step() const { return first_break_step_; }
+  double first_break_time() const { return first_break_time_; }
 
  private:
   int law_of(int a, int b) const {
@@ -233,6 +285,8 @@ class PairEffect final : public Effect<D> {
   std::vector<std::uint8_t> alive_;
   std::vector<double> phi_break_;
   long first_break_step_ = -1;
+  double first_break_time_ = -1.0;
+  std::vector<double> law_mass_;  ///< g: the lightest particle a law acts on (Eq. 15 takes the smallest m)
   detail::BondStencil<D> stencil_;       ///< bonded model: the bonds
   detail::BondStencil<D> list_stencil_;  ///< cutoff model: the Verlet list
   PairTable<D> list_;
@@ -253,6 +307,7 @@ BondView<D> bond_view(const Effect<D>& e) {
   if (auto* p = dynamic_cast<const PairEffect<D>*>(&e)) {
     v.alive = &p->alive();
     v.first_break_step = p->first_break_step();
+    v.first_break_time = p->first_break_time();
   }
   return v;
 }

@@ -2,6 +2,7 @@
 
 #include "pmfrag/h5md.hpp"
 #include "pmfrag/leapfrog.hpp"
+#include "pmfrag/step_levels.hpp"
 
 #include <chrono>
 #include <csignal>
@@ -25,17 +26,24 @@ std::string fmt(const char* f, double v) {
 }
 
 template <int D>
-RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, double dt, double limit,
+RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, const StepChoice& choice,
                   const Checkpoint* from) {
+  const double dt = choice.dt, limit = choice.limit;  // adaptive: dt is the cap
+  const bool adaptive = choice.adaptive;
   RunResult res;
   res.particles = sys.size();
   res.dt = dt;
   res.dt_limit = limit;
+  res.adaptive = adaptive;
+  // Fixed steps count steps; adaptive steps count time and land exactly on every output time.
   const long steps = std::max(1L, std::lround(scene.time.end / dt));
   const long every = std::max(1L, std::lround(scene.output.every / dt));
   const long checkpoint_every =
       scene.output.checkpoint_every > 0 ? std::max(1L, std::lround(scene.output.checkpoint_every / dt)) : 10 * every;
-  RunParameters rp{dt, limit, scene.time.end, every};
+  const double every_s = scene.output.every, end = scene.time.end, tol = 1e-9 * std::min(every_s, dt);
+  const long checkpoint_frames =
+      scene.output.checkpoint_every > 0 ? std::max(1L, std::lround(scene.output.checkpoint_every / every_s)) : 10;
+  RunParameters rp{dt, limit, end, adaptive ? 0 : every, adaptive};
 
   namespace fs = std::filesystem;
   const fs::path dir(opt.out_dir);
@@ -57,17 +65,21 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
                                                 : std::make_unique<H5mdWriter>(traj.string(), sys, scene, rp);
   H5mdWriter& writer = *writer_ptr;
 
-  Leapfrog<D> lf(sys, make_effects<D>(sys, scene), dt);
+  Leapfrog<D> lf(sys, make_effects<D>(sys, scene), dt, adaptive);
   if (from) {
-    lf.restore(from->step, from->position, from->velocity, from->effects);
+    lf.restore(from->step, from->time, from->dt, from->position, from->velocity, from->effects);
     if (opt.log) opt.log("resumed at step " + std::to_string(from->step) + " (t = " + fmt("%.6g", lf.state().time()) + " s)");
   }
   if (opt.log) {
     std::string names;
     for (const auto& e : lf.effects()) names += (names.empty() ? "" : ", ") + e->name();
     opt.log("effects: " + (names.empty() ? std::string("none") : names));
-    opt.log(std::to_string(sys.size()) + " particles, " + std::to_string(sys.bonds.size()) + " bonds, " +
-            std::to_string(steps) + " steps, a frame every " + std::to_string(every) + " steps");
+    if (adaptive)
+      opt.log(std::to_string(sys.size()) + " particles, " + std::to_string(sys.bonds.size()) +
+              " bonds, adaptive steps up to " + fmt("%.4g", dt) + " s, a frame every " + fmt("%.4g", every_s) + " s");
+    else
+      opt.log(std::to_string(sys.size()) + " particles, " + std::to_string(sys.bonds.size()) + " bonds, " +
+              std::to_string(steps) + " steps, a frame every " + std::to_string(every) + " steps");
   }
 
   std::vector<Eigen::Matrix<double, D, 1>> v;
@@ -82,6 +94,8 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
     writer.write_frame(s.step, s.time(), xbuf, vbuf, lf.observe());
   };
 
+  StepLevels levels(dt, every_s);
+  if (from) levels.restore(from->level, from->calm);
   using clock = std::chrono::steady_clock;
   const auto t0 = clock::now();
   auto last_report = t0;
@@ -89,24 +103,53 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
     const auto& s = lf.state();
     Checkpoint c;
     c.step = s.step;
+    c.time = s.t;
+    c.dt = s.dt;
+    c.level = levels.level(), c.calm = levels.calm();
     c.frames = writer.frames();
     for (std::size_t i = 0; i < s.size(); ++i)
       for (int d = 0; d < D; ++d) c.position.push_back(s.x[i][d]), c.velocity.push_back(s.v[i][d]);
     c.effects = lf.effect_state();
     write_checkpoint(ckpt.string(), c);
   };
+  auto done = [&] { return adaptive ? !(lf.state().t < end - tol) : lf.state().step >= steps; };
+  double dt_min_taken = dt;
   try {
     if (!from) write();
-    while (lf.state().step < steps) {
-      lf.step();
+    while (!done()) {
+      bool frame_due = false, take_checkpoint = false;
+      if (adaptive) {
+        // The stability limit at the closest approach present, as a power-of-two level of the cap (see
+        // step_levels.hpp), cut short only to land on an output time.
+        const double allowed = scene.time.safety * choice.lattice_factor * lf.step_limit();
+        double h = 0.0;
+        try {
+          h = levels.next(allowed);
+        } catch (const std::runtime_error&) {
+          throw GuardError("adaptive step collapsed (the limit at the closest approach is " + fmt("%.3g", allowed) +
+                               " s) at t = " + fmt("%.6g", lf.state().t) +
+                               " s: particles are pressed together with no r_min clamp; set pair.r_min",
+                           lf.state().step, lf.state().t, -1);
+        }
+        const double to_out = std::min(static_cast<double>(writer.frames()) * every_s, end) - lf.state().t;
+        if (h >= to_out - tol) h = to_out;
+        dt_min_taken = std::min(dt_min_taken, h);
+        lf.step(h);
+        frame_due = !(lf.state().t < static_cast<double>(writer.frames()) * every_s - tol) || done();
+        take_checkpoint = frame_due && !done() && writer.frames() % checkpoint_frames == 0;
+      } else {
+        lf.step();
+        const long k = lf.state().step;
+        frame_due = k % every == 0 || k == steps;
+        take_checkpoint = k % checkpoint_every == 0 && k < steps;
+      }
       const long k = lf.state().step;
       // At a checkpoint step the lists are rebuilt first, in an uninterrupted run as in a resumed one, so
       // both continue bitwise alike.
-      const bool take_checkpoint = k % checkpoint_every == 0 && k < steps;
       if (take_checkpoint) lf.canonicalize();
-      if (k % every == 0 || k == steps) write();
+      if (frame_due) write();
       if (take_checkpoint) checkpoint();
-      if (stop_requested && k < steps) {
+      if (stop_requested && !done()) {
         // Interrupted: keep the frames written and checkpoint this step so --resume continues from here.
         checkpoint();
         res.interrupted = true;
@@ -120,9 +163,10 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
           last_report = now;
           Progress p;
           p.wall_s = std::chrono::duration<double>(now - t0).count();
-          p.step = k, p.steps = steps, p.time = lf.state().time(), p.end = scene.time.end;
+          p.step = k, p.time = lf.state().time(), p.end = end;
+          p.steps = adaptive ? std::max(k, std::lround(k * end / std::max(p.time, tol))) : steps;
           p.steps_per_s = k / p.wall_s;
-          p.eta_s = (steps - k) / p.steps_per_s;
+          p.eta_s = (p.steps - k) / p.steps_per_s;
           opt.progress(p);
         }
       }
@@ -134,11 +178,12 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
   }
   res.wall_s = std::chrono::duration<double>(clock::now() - t0).count();
   res.steps = lf.state().step;
+  res.dt_min = dt_min_taken;
   res.frames = writer.frames();
   writer.close();
   for (const auto& e : lf.effects()) {
     const auto bv = bond_view<D>(*e);
-    if (bv.alive && bv.first_break_step >= 0) res.first_break_time = static_cast<double>(bv.first_break_step) * dt;
+    if (bv.alive && bv.first_break_step >= 0) res.first_break_time = bv.first_break_time;
   }
 
   // run.json: what ran and how fast (for sweeps and benchmarks); written whole, then renamed.
@@ -150,6 +195,7 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
     for (char c : res.message) js << (c == '"' || c == '\\' ? std::string("\\") + c : std::string(1, c));
     js << "\",\n  \"particles\": " << res.particles << ",\n  \"steps\": " << res.steps
        << ",\n  \"frames\": " << res.frames << ",\n  \"dt_s\": " << fmt("%.10g", dt)
+       << ",\n  \"dt_adaptive\": " << (adaptive ? "true" : "false") << ",\n  \"dt_min_s\": " << fmt("%.10g", res.dt_min)
        << ",\n  \"dt_limit_s\": " << fmt("%.10g", limit) << ",\n  \"wall_s\": " << fmt("%.6g", res.wall_s)
        << ",\n  \"particle_steps_per_s\": " << fmt("%.6g", res.particle_steps_per_s())
        << ",\n  \"first_break_time_s\": " << fmt("%.10g", res.first_break_time) << "\n}\n";
@@ -164,19 +210,27 @@ void request_stop() noexcept { stop_requested = 1; }
 
 RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   const System sys = build_system(scene);
-  const double limit = system_dt_limit(sys);
-  const double dt = scene.time.auto_dt ? scene.time.safety * limit : scene.time.dt;
-  if (opt.log)
-    opt.log("dt = " + fmt("%.4g", dt) + " s, Eq. 15 limit = " + fmt("%.4g", limit) + " s" +
-            (sys.r_min > 0 ? " (at r_min = " + fmt("%.3g", sys.r_min) + " cm)" : " (stretch, at r0)") +
-            ", dt/limit = " + fmt("%.3f", dt / limit));
-  if (dt > limit && !opt.allow_unstable)
-    throw UnstableStepError(scene.file + ": time.dt = " + fmt("%.4g", dt) + " s exceeds the Eq. 15 stability limit " +
-                            fmt("%.4g", limit) + " s (ratio " + fmt("%.3f", dt / limit) +
+  const StepChoice choice = choose_step(scene, sys);
+  const double limit = choice.limit, dt = choice.dt;
+  if (opt.log) {
+    const std::string where =
+        sys.r_min > 0 ? " (at r_min = " + fmt("%.3g", sys.r_min) + " cm)" : std::string(" (stretch, at r0)");
+    const std::string limits = "stability limit " + fmt("%.4g", limit) + " s = Eq. 15 " + fmt("%.4g", choice.pair_limit) +
+                               " s" + where + " x lattice factor " + fmt("%.3f", choice.lattice_factor);
+    if (choice.adaptive)
+      opt.log("dt adaptive: " + fmt("%.3g", scene.time.safety) + " x the limit at the closest approach, at most " +
+              fmt("%.4g", dt) + " s (" + limits + ")");
+    else
+      opt.log("dt = " + fmt("%.4g", dt) + " s, " + limits + ", dt/limit = " + fmt("%.3f", dt / limit));
+  }
+  if (!choice.adaptive && dt > limit && !opt.allow_unstable)
+    throw UnstableStepError(scene.file + ": time.dt = " + fmt("%.4g", dt) + " s exceeds the stability limit " +
+                            fmt("%.4g", limit) + " s (Eq. 15 x lattice factor " + fmt("%.3f", choice.lattice_factor) +
+                            "; ratio " + fmt("%.3f", dt / limit) +
                             "); lower it, use dt = \"auto\", or pass --allow-unstable");
   if (scene.time.end < dt) throw SceneError(scene.file + ": time.end is shorter than one step");
-  if (scene.dim == 2) return run_dim<2>(scene, sys, opt, dt, limit, nullptr);
-  return run_dim<3>(scene, sys, opt, dt, limit, nullptr);
+  if (scene.dim == 2) return run_dim<2>(scene, sys, opt, choice, nullptr);
+  return run_dim<3>(scene, sys, opt, choice, nullptr);
 }
 
 RunResult resume_run(const RunOptions& opt) {
@@ -218,10 +272,9 @@ RunResult resume_run(const RunOptions& opt) {
   }
   const Checkpoint c = read_checkpoint(ckpt.string());
   const System sys = build_system(scene);
-  const double limit = system_dt_limit(sys);
-  const double dt = scene.time.auto_dt ? scene.time.safety * limit : scene.time.dt;
-  if (scene.dim == 2) return run_dim<2>(scene, sys, o, dt, limit, &c);
-  return run_dim<3>(scene, sys, o, dt, limit, &c);
+  const StepChoice choice = choose_step(scene, sys);
+  if (scene.dim == 2) return run_dim<2>(scene, sys, o, choice, &c);
+  return run_dim<3>(scene, sys, o, choice, &c);
 }
 
 }  // namespace pmfrag

@@ -489,8 +489,11 @@ Scene parse_scene(const std::string& text, const std::string& file, const std::v
     Tab t = top.sub("time");
     const toml::node& dt = t.require("dt");
     if (dt.is_string()) {
-      if (*dt.value<std::string>() != "auto") t.fail_at(&dt, "dt", "expected a step in seconds or \"auto\"");
-      sc.time.auto_dt = true;
+      const std::string mode = *dt.value<std::string>();
+      if (mode != "auto" && mode != "adaptive")
+        t.fail_at(&dt, "dt", "expected a step in seconds, \"auto\" or \"adaptive\" (got \"" + mode + "\")");
+      sc.time.auto_dt = mode == "auto";
+      sc.time.adaptive = mode == "adaptive";
     } else {
       sc.time.dt = t.number(dt, "dt");
       if (!(sc.time.dt > 0.0)) t.fail_at(&dt, "dt", "must be positive (got " + std::to_string(sc.time.dt) + ")");
@@ -498,6 +501,10 @@ Scene parse_scene(const std::string& text, const std::string& file, const std::v
     sc.time.safety = t.number("safety", 0.5);
     if (!(sc.time.safety > 0.0 && sc.time.safety <= 1.0)) t.fail_at(t.get("safety"), "safety", "must be in (0, 1]");
     sc.time.end = t.positive("end");
+    if (t.has("dt_max")) {
+      if (!sc.time.adaptive) t.fail_at(t.get("dt_max"), "dt_max", "only with dt = \"adaptive\"");
+      sc.time.dt_max = t.positive("dt_max");
+    }
     t.done();
   }
   if (top.has("output")) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <set>
 
 namespace pmfrag {
@@ -190,17 +191,87 @@ std::vector<int> select_particles(const System& sys, const Selection& sel, const
   return out;
 }
 
-double system_dt_limit(const System& sys) {
+double pair_dt_limit(const System& sys, bool at_r_min) {
   double limit = INFINITY;
   const std::size_t np = sys.phase_names.size();
   for (std::size_t a = 0; a < np; ++a)
     for (std::size_t b = 0; b < np; ++b) {
       const PairLaw& law = sys.law(static_cast<int>(a), static_cast<int>(b));
       const double m = std::min(sys.phase_mass[a], sys.phase_mass[b]);
-      const double r = sys.r_min > 0.0 ? sys.r_min : law.equilibrium_spacing();
+      const double r = at_r_min && sys.r_min > 0.0 ? sys.r_min : law.equilibrium_spacing();
       limit = std::min(limit, dt_limit(law, m, r));
     }
   return limit;
+}
+
+double lattice_dt_limit(const System& sys) {
+  // Power iteration on A = M^-1/2 K M^-1/2 (symmetric, same eigenvalues as M^-1 K). Each bond is a spring
+  // along its direction with the law's stiffness -dF/dr at its initial length. The Rayleigh quotient after
+  // n iterations weighs an eigenvalue 1% below the top by 0.99^(2n): 400 iterations land within about 1%.
+  const std::size_t n = sys.size();
+  if (sys.bonds.empty()) return INFINITY;
+  const int D = sys.dim;
+  struct Spring {
+    std::size_t i, j;
+    Vec3 e;
+    double k;
+  };
+  std::vector<Spring> springs;
+  springs.reserve(sys.bonds.size());
+  for (const auto& b : sys.bonds) {
+    const std::size_t i = static_cast<std::size_t>(b[0]), j = static_cast<std::size_t>(b[1]);
+    const Vec3 d = sys.position[j] - sys.position[i];
+    const double r = d.norm();
+    const double k = std::max(0.0, sys.law(sys.phase[i], sys.phase[j]).stiffness(r));
+    springs.push_back({i, j, d / r, k});
+  }
+  std::vector<double> w(n);  // M^-1/2
+  for (std::size_t i = 0; i < n; ++i) w[i] = 1.0 / std::sqrt(sys.phase_mass[static_cast<std::size_t>(sys.phase[i])]);
+  std::vector<Vec3> v(n, Vec3::Zero()), Av(n);
+  std::uint64_t seed = 0x9E3779B97F4A7C15ull;  // fixed start: the same limit every time
+  for (auto& x : v)
+    for (int d = 0; d < D; ++d) {
+      seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+      x[d] = static_cast<double>(seed >> 11) * 0x1.0p-53 - 0.5;
+    }
+  double lambda = 0.0;
+  for (int it = 0; it < 400; ++it) {
+    double norm2 = 0.0;
+    for (const auto& x : v) norm2 += x.squaredNorm();
+    const double inv = 1.0 / std::sqrt(norm2);
+    for (auto& x : v) x *= inv;
+    std::fill(Av.begin(), Av.end(), Vec3::Zero());
+    for (const auto& s : springs) {
+      const double t = s.k * s.e.dot(w[s.i] * v[s.i] - w[s.j] * v[s.j]);
+      Av[s.i] += (w[s.i] * t) * s.e;
+      Av[s.j] -= (w[s.j] * t) * s.e;
+    }
+    lambda = 0.0;
+    for (std::size_t i = 0; i < n; ++i) lambda += v[i].dot(Av[i]);
+    std::swap(v, Av);
+  }
+  return lambda > 0.0 ? 2.0 / std::sqrt(lambda) : INFINITY;
+}
+
+double lattice_factor(const System& sys) {
+  const double pair = pair_dt_limit(sys, false), lattice = lattice_dt_limit(sys);
+  return std::isfinite(lattice) ? std::min(1.0, lattice / pair) : 1.0;
+}
+
+double system_dt_limit(const System& sys, bool at_r_min) { return lattice_factor(sys) * pair_dt_limit(sys, at_r_min); }
+
+StepChoice choose_step(const Scene& scene, const System& sys) {
+  StepChoice c;
+  c.lattice_factor = lattice_factor(sys);
+  c.pair_limit = pair_dt_limit(sys);
+  c.limit = c.lattice_factor * c.pair_limit;
+  c.adaptive = scene.time.adaptive;
+  if (scene.time.adaptive)
+    c.dt = scene.time.dt_max > 0.0 ? scene.time.dt_max
+                                   : scene.time.safety * c.lattice_factor * pair_dt_limit(sys, false);
+  else
+    c.dt = scene.time.auto_dt ? scene.time.safety * c.limit : scene.time.dt;
+  return c;
 }
 
 }  // namespace pmfrag

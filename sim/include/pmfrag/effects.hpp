@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -22,9 +23,10 @@ struct State {
   std::vector<double> mass;      ///< g
   std::vector<double> inv_mass;  ///< 1/g; 0 for particles whose motion is prescribed (kinematic)
   long step = 0;
-  double dt = 0.0;  ///< s
+  double dt = 0.0;  ///< s: the step that led to r_k (fixed steps: every step)
+  double t = 0.0;   ///< s: the time of r_k
   double r0 = 0.2;  ///< cm
-  double time() const { return static_cast<double>(step) * dt; }
+  double time() const { return t; }
   std::size_t size() const { return x.size(); }
 };
 
@@ -44,6 +46,7 @@ inline constexpr unsigned setup = 1u << 0;       ///< once, before the first for
 inline constexpr unsigned force = 1u << 1;       ///< add forces at r_k (in attachment order; pair first)
 inline constexpr unsigned after_move = 1u << 2;  ///< after r_{k+1} is known (neighbour lists)
 inline constexpr unsigned observe = 1u << 3;     ///< contribute to Observables on output steps
+inline constexpr unsigned step_limit = 1u << 4;  ///< bound the next step (called only for dt = "adaptive")
 }  // namespace stage
 
 template <int D>
@@ -58,6 +61,8 @@ class Effect {
   /// `max_step` bounds how far any particle moved in this step [cm] (a cheap bound for Verlet lists).
   virtual void after_move(State<D>&, double /*max_step*/) {}
   virtual void observe(const State<D>&, Observables&) const {}
+  /// The Eq. (15) limit [s] for the configuration at r_k (adaptive steps only).
+  virtual double step_limit(const State<D>&) const { return std::numeric_limits<double>::infinity(); }
   /// Make the next force evaluation independent of history (e.g. rebuild neighbour lists now), so a run
   /// resumed from this step is bitwise identical to one that never stopped.
   virtual void canonicalize(const State<D>&) {}
@@ -77,6 +82,7 @@ template <int D>
 struct BondView {
   const std::vector<std::uint8_t>* alive = nullptr;
   long first_break_step = -1;
+  double first_break_time = -1.0;  ///< s
 };
 template <int D>
 BondView<D> bond_view(const Effect<D>& e);

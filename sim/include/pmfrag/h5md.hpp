@@ -17,7 +17,8 @@ struct RunParameters {
   double dt = 0.0;        ///< s
   double dt_limit = 0.0;  ///< s, Eq. (15)
   double end = 0.0;       ///< s
-  long frame_every = 1;   ///< steps between frames
+  long frame_every = 1;   ///< steps between frames (0 with adaptive steps: frames are every output.every s)
+  bool adaptive = false;  ///< dt = "adaptive" (dt is then the cap)
 };
 
 class H5mdWriter {
@@ -79,6 +80,8 @@ class H5mdReader {
 /// frames the trajectory had at that step.
 struct Checkpoint {
   long step = 0;
+  double time = 0.0, dt = 0.0;  ///< s: time of the step, and the step that led to it
+  int level = 0, calm = 0;      ///< adaptive steps: StepLevels history
   long frames = 0;
   std::vector<double> position, velocity, effects;
 };

@@ -22,11 +22,17 @@ class Leapfrog {
   using V = Eigen::Matrix<double, D, 1>;
 
   /// Takes the System's particles at t = 0, runs the effects' setup, and evaluates forces at r_0.
-  Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>> effects, double dt);
+  /// `adaptive`: steps will vary (dt = "adaptive"), so time is summed rather than step x dt.
+  Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>> effects, double dt, bool adaptive = false);
 
   /// One step k -> k+1: Eq. (12) at k = 0 (starter half step), Eq. (13) after, and Eq. (14) in one pass;
   /// then forces at r_{k+1}, so forces are always those of the current positions between steps.
-  void step();
+  void step() { step(s_.dt); }
+  /// The same with a step of its own (dt = "adaptive"): the kick spans half of the previous step and half
+  /// of this one, v_k+1/2 = v_k-1/2 + (dt_k-1 + dt_k)/2 a_k, which is Eq. (13) when the two are equal.
+  void step(double dt);
+  /// The smallest Eq. (15) limit the attached effects report for the present configuration [s].
+  double step_limit() const;
 
   /// Whole-step velocities v_k = v_{k-1/2} + (dt/2) a_k (v_0 at k = 0), as written to frames.
   void whole_step_velocity(std::vector<V>& out) const;
@@ -40,7 +46,8 @@ class Leapfrog {
   std::vector<double> effect_state() const;
   /// Continue from a checkpoint: step, positions r_k, half-step velocities v_k-1/2 and effect history; lists
   /// are rebuilt and forces evaluated exactly as canonicalize() did when the checkpoint was taken.
-  void restore(long step, const std::vector<double>& x, const std::vector<double>& v, const std::vector<double>& effects);
+  void restore(long step, double time, double dt, const std::vector<double>& x, const std::vector<double>& v,
+               const std::vector<double>& effects);
 
   State<D>& state() { return s_; }
   const State<D>& state() const { return s_; }
@@ -50,7 +57,8 @@ class Leapfrog {
   void compute_forces(bool zeroed = false);
   State<D> s_;
   std::vector<std::unique_ptr<Effect<D>>> effects_;
-  std::vector<Effect<D>*> force_, after_move_, observe_;
+  std::vector<Effect<D>*> force_, after_move_, observe_, step_limit_;
+  bool uniform_ = true;  ///< every step so far had the same dt: time = step x dt exactly
 };
 
 }  // namespace pmfrag

@@ -29,6 +29,8 @@ struct RunResult {
   std::size_t particles = 0;
   double dt = 0.0, dt_limit = 0.0, wall_s = 0.0;
   double first_break_time = -1.0;  ///< s; -1 if no bond broke
+  bool adaptive = false;           ///< dt = "adaptive": dt is the cap, dt_min the smallest step taken
+  double dt_min = 0.0;             ///< s
   bool completed = false;          ///< false: stopped by the guard or interrupted (message says why)
   bool interrupted = false;        ///< stopped by request_stop(): a checkpoint was written at that step
   std::string message;
