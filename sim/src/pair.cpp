@@ -73,6 +73,9 @@ class PairEffect final : public Effect<D> {
       });
       if (broke > 0) {
         retire_broken(s);
+        // A pair whose bond just broke must repel as a contact from the next step on: rebuild the list then
+        // (it excluded the pair while bonded).
+        if (uses_list_) moved_bound_ = std::numeric_limits<double>::infinity();
         if (first_break_step_ < 0) first_break_step_ = s.step, first_break_time_ = s.time();
       }
     }

@@ -40,7 +40,7 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
   const long every = std::max(1L, std::lround(scene.output.every / dt));
   const long checkpoint_every =
       scene.output.checkpoint_every > 0 ? std::max(1L, std::lround(scene.output.checkpoint_every / dt)) : 10 * every;
-  const double every_s = scene.output.every, end = scene.time.end, tol = 1e-9 * std::min(every_s, dt);
+  const double every_s = scene.output.every, end = scene.time.end, tol = 1e-6 * std::min(every_s, dt);
   const long checkpoint_frames =
       scene.output.checkpoint_every > 0 ? std::max(1L, std::lround(scene.output.checkpoint_every / every_s)) : 10;
   RunParameters rp{dt, limit, end, adaptive ? 0 : every, adaptive};

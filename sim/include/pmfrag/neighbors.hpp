@@ -21,6 +21,7 @@ class CellList {
   template <class F>
   void for_each_pair(const std::vector<V>& x, double cutoff, F&& f) {
     const std::size_t n = x.size();
+    checks_ = 0;
     if (n < 2) return;
     V lo = x[0];
     for (const auto& p : x) lo = lo.cwiseMin(p);
@@ -49,6 +50,7 @@ class CellList {
             if (nkey < key) continue;
             auto range = std::equal_range(entries_.begin(), entries_.end(), Entry{nkey, 0},
                                           [](const Entry& a, const Entry& b) { return a.key < b.key; });
+            checks_ += (end - begin) * static_cast<std::size_t>(range.second - range.first);
             for (std::size_t a = begin; a < end; ++a) {
               const std::uint32_t i = entries_[a].index;
               for (auto it = range.first; it != range.second; ++it) {
@@ -63,8 +65,12 @@ class CellList {
     }
   }
 
- private:
+  /// Candidate pairs the last call examined (work, for tests: it must not grow with how far pieces fly).
+  std::size_t checks() const { return checks_; }
+  /// Cells span up to 2^21 cutoffs per axis (8e5 cm at D = 0.34 cm); pieces beyond share edge cells.
   static constexpr std::int64_t max_cell = (1 << 21) - 1;
+
+ private:
   struct Entry {
     std::uint64_t key;
     std::uint32_t index;
@@ -84,6 +90,7 @@ class CellList {
             static_cast<std::int64_t>(k >> 42)};
   }
   std::vector<Entry> entries_;
+  std::size_t checks_ = 0;
 };
 
 }  // namespace pmfrag
