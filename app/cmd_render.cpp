@@ -85,7 +85,23 @@ void run(const RenderCli& o) {
   const auto species = rd.species();
   const double r0 = rd.parameter("r0");
   analysis::FragmentTracker tracker(rd.particles(), rd.bonds(), rd.mass(), dim, rd.parameter("cutoff"));
-  const long frames = rd.frames();
+  // Only the leading frames that read back whole (a cut file, a frame failing its checksum): the sequence is
+  // then marked partial, on the terminal and in frames/PARTIAL.txt.
+  long frames = rd.frames();
+  std::string damage = rd.damage();
+  for (long k = 0; k < frames; ++k) {
+    try {
+      (void)rd.frame(k);
+    } catch (const std::exception& e) {
+      damage += std::string(damage.empty() ? "" : "; ") + "frame " + std::to_string(k) + " unreadable (" + e.what() + ")";
+      frames = k;
+    }
+  }
+  if (frames == 0) throw std::runtime_error((dir / "trajectory.h5").string() + ": no readable frame (" + damage + ")");
+  if (!damage.empty())
+    std::fprintf(stderr, "pmfrag: warning: trajectory damaged (%s): rendering frames 0..%ld only (PARTIAL)\n",
+                 damage.c_str(), frames - 1);
+  const std::vector<double> times = rd.times();
   const TrajectoryFrame first = rd.frame(0);
   const TrajectoryFrame last = rd.frame(frames - 1);
 
@@ -133,13 +149,20 @@ void run(const RenderCli& o) {
 
   render::HeadlessWindow window(o.size, o.size);
   const fs::path frames_dir = dir / "frames";
-  if (!o.no_frames) fs::create_directories(frames_dir);
+  if (!o.no_frames) {
+    fs::create_directories(frames_dir);
+    const fs::path note = frames_dir / "PARTIAL.txt";
+    if (damage.empty())
+      fs::remove(note);
+    else
+      std::ofstream(note) << "frames 0.." << frames - 1 << " of a damaged trajectory: " << damage << "\n";
+  }
   std::vector<long> panel_frames;
   for (double a : panel_at) {
     const double t = a * last.time;
     long best = 0;
     for (long k = 0; k < frames; ++k)
-      if (std::fabs(rd.frame(k).time - t) < std::fabs(rd.frame(best).time - t)) best = k;
+      if (std::fabs(times[static_cast<std::size_t>(k)] - t) < std::fabs(times[static_cast<std::size_t>(best)] - t)) best = k;
     panel_frames.push_back(best);
   }
   std::vector<render::FramePicture> panel(panel_frames.size());

@@ -162,13 +162,19 @@ void write_frame(const fs::path& file, const Static& st, const TrajectoryFrame& 
   fs::rename(tmp, file);
 }
 
-void write_pvd(const fs::path& path, const std::vector<std::pair<double, std::string>>& frames) {
+void write_pvd(const fs::path& path, const std::vector<std::pair<double, std::string>>& frames, const std::string& partial) {
   const fs::path tmp = path.string() + ".tmp";
   {
     std::ofstream o(tmp);
     o.precision(17);
     o << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
          "  <Collection>\n";
+    // A partial export says so where ParaView users look (the file itself), not only on the terminal.
+    if (!partial.empty()) {
+      std::string safe = partial;
+      for (std::size_t at; (at = safe.find("--")) != std::string::npos;) safe.replace(at, 2, "- -");
+      o << "    <!-- PARTIAL: " << safe << " -->\n";
+    }
     for (const auto& [t, file] : frames) o << "    <DataSet timestep=\"" << t << "\" part=\"0\" file=\"" << file << "\"/>\n";
     o << "  </Collection>\n</VTKFile>\n";
     if (!o) throw std::runtime_error(path.string() + ": write failed");
@@ -184,6 +190,8 @@ ExportResult export_vtk(const std::string& run_dir, const ExportOptions& opt) {
   if (opt.every < 1) throw std::invalid_argument("--every: must be at least 1");
   const fs::path dir(run_dir);
   H5mdReader rd((dir / "trajectory.h5").string());
+  ExportResult res;
+  if (!rd.damage().empty()) res.partial = true, res.note = "trajectory " + rd.damage();
   Static st;
   st.n = rd.particles();
   st.dim = rd.dim();
@@ -196,7 +204,6 @@ ExportResult export_vtk(const std::string& run_dir, const ExportOptions& opt) {
   st.nphase = static_cast<std::size_t>(std::lround(std::sqrt(static_cast<double>(st.pair_law.size()))));
   FragmentTracker tracker(st.n, st.bonds, st.mass, st.dim, break_length(rd, opt.criterion));
   fs::create_directories(dir / "vtk");
-  ExportResult res;
   std::vector<std::pair<double, std::string>> written;
   TrajectoryFrame first;
   const long frames = rd.frames();
@@ -206,7 +213,8 @@ ExportResult export_vtk(const std::string& run_dir, const ExportOptions& opt) {
       f = rd.frame(k);
     } catch (const std::exception& e) {
       res.partial = true;
-      res.note = "frame " + std::to_string(k) + " unreadable (" + e.what() + "); exported frames before it";
+      res.note += std::string(res.note.empty() ? "" : "; ") + "frame " + std::to_string(k) + " unreadable (" + e.what() +
+                  "); exported frames before it";
       break;
     }
     if (k == 0) first = f;
@@ -219,7 +227,7 @@ ExportResult export_vtk(const std::string& run_dir, const ExportOptions& opt) {
     written.emplace_back(f.time, std::string("vtk/") + name);
     ++res.frames_written;
   }
-  write_pvd(dir / "particles.pvd", written);
+  write_pvd(dir / "particles.pvd", written, res.partial ? res.note : std::string());
   return res;
 }
 

@@ -160,9 +160,22 @@ double break_length(const H5mdReader& rd, const BreakCriterion& c) {
   return 0.0;
 }
 
+namespace {
+std::string json_escaped(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) continue;
+    out += c;
+  }
+  return out;
+}
+}  // namespace
+
 FragmentReport analyse_fragments(const std::string& trajectory, const BreakCriterion& criterion) {
   H5mdReader rd(trajectory);
   FragmentReport rep;
+  if (!rd.damage().empty()) rep.partial = true, rep.note = "trajectory " + rd.damage();
   rep.threshold_cm = break_length(rd, criterion);
   const auto laws = rd.laws();
   if (laws.size() == 1) rep.p = laws.front().p, rep.q = laws.front().q;  // several phases: no single (p,q)
@@ -184,7 +197,8 @@ FragmentReport analyse_fragments(const std::string& trajectory, const BreakCrite
       f = rd.frame(k);
     } catch (const std::exception& e) {
       rep.partial = true;
-      rep.note = "frame " + std::to_string(k) + " unreadable (" + e.what() + "); analysed frames 0.." + std::to_string(k - 1);
+      rep.note += std::string(rep.note.empty() ? "" : "; ") + "frame " + std::to_string(k) + " unreadable (" + e.what() +
+                  "); analysed frames 0.." + std::to_string(k - 1);
       break;
     }
     labels = tracker.update(f.position);
@@ -259,7 +273,7 @@ void write_fragment_report(const FragmentReport& r, const std::string& dir_name)
   write_atomically(dir / "summary.json", [&](std::ostream& o) {
     o << "{\n  \"p\": " << r.p << ",\n  \"q\": " << r.q << ",\n  \"break_criterion\": \"" << r.criterion
       << "\",\n  \"break_length_cm\": " << r.threshold_cm << ",\n  \"frames\": " << r.frames_read
-      << ",\n  \"partial\": " << (r.partial ? "true" : "false") << ",\n  \"note\": \"" << r.note
+      << ",\n  \"partial\": " << (r.partial ? "true" : "false") << ",\n  \"note\": \"" << json_escaped(r.note)
       << "\",\n  \"onset_time_s\": " << r.onset_time << ",\n  \"separation_time_s\": " << r.separation_time
       << ",\n  \"final_time_s\": " << end.time << ",\n  \"broken_bonds\": " << end.broken
       << ",\n  \"fragments\": " << end.fragments << ",\n  \"fragments_2plus\": " << multi

@@ -1,8 +1,13 @@
 #include "pmfrag/h5md.hpp"
 
 #include <hdf5.h>
+#include <unistd.h>
 
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <stdexcept>
 
 namespace pmfrag {
@@ -106,6 +111,9 @@ struct Series {
     hid_t space = H5Screate_simple(static_cast<int>(dims.size()), dims.data(), maxd.data());
     hid_t plist = H5Pcreate(H5P_DATASET_CREATE);
     H5Pset_chunk(plist, static_cast<int>(chunk.size()), chunk.data());
+    // Per-frame chunks are written once: a checksum lets a reader tell an altered frame from a good one.
+    // (Series of scalars share chunks of 256 that are rewritten in place, so they stay unfiltered.)
+    if (!frame.empty()) H5Pset_fletcher32(plist);
     hid_t d = checked(H5Dcreate2(g, name, t, space, H5P_DEFAULT, plist, H5P_DEFAULT), name);
     H5Pclose(plist), H5Sclose(space);
     return d;
@@ -340,10 +348,69 @@ std::vector<T> read_all(hid_t file, const std::string& path) {
 }
 }  // namespace
 
+namespace {
+// The end-of-file address an HDF5 superblock records (versions 0-3, 8-byte offsets), or 0 if unreadable.
+std::uint64_t stored_eof(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char b[64] = {};
+  in.read(reinterpret_cast<char*>(b), sizeof b);
+  if (in.gcount() < 48 || std::memcmp(b, "\x89HDF\r\n\x1a\n", 8) != 0) return 0;
+  const int version = b[8];
+  std::size_t at = 0;
+  if (version == 0 && b[13] == 8) at = 40;
+  else if (version == 1 && b[13] == 8) at = 44;
+  else if ((version == 2 || version == 3) && b[9] == 8) at = 28;
+  else return 0;
+  std::uint64_t v = 0;
+  for (int k = 7; k >= 0; --k) v = v << 8 | b[at + static_cast<std::size_t>(k)];
+  return v;
+}
+
+// Whether frame `index` of a per-frame-chunked dataset, or entry `index` of a series, lies before `limit`.
+bool chunk_before(hid_t file, const char* path, hsize_t index, std::uint64_t limit) {
+  hid_t d = H5Dopen2(file, path, H5P_DEFAULT);
+  if (d < 0) return false;
+  hid_t dcpl = H5Dget_create_plist(d);
+  hsize_t chunk[4] = {1, 1, 1, 1};
+  const int rank = H5Pget_chunk(dcpl, 4, chunk);
+  H5Pclose(dcpl);
+  hsize_t offset[4] = {0, 0, 0, 0};
+  offset[0] = rank > 0 ? index / chunk[0] * chunk[0] : 0;
+  unsigned mask = 0;
+  haddr_t addr = HADDR_UNDEF;
+  hsize_t size = 0;
+  const bool ok = rank > 0 && H5Dget_chunk_info_by_coord(d, offset, &mask, &addr, &size) >= 0 && addr != HADDR_UNDEF &&
+                  addr + size <= limit;
+  H5Dclose(d);
+  return ok;
+}
+}  // namespace
+
 H5mdReader::H5mdReader(const std::string& path) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // we report missing objects ourselves
   file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-  if (file_ < 0) throw std::runtime_error(path + ": cannot open as HDF5");
+  std::uint64_t limit = 0;
+  if (file_ < 0) {
+    // Cut short? HDF5 refuses a file shorter than the end its superblock records; pad a copy with zeros
+    // to that length and read only what lies before the cut.
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const std::uint64_t size = fs::file_size(path, ec), eof = ec ? 0 : stored_eof(path);
+    if (eof > size && size > 0) {
+      padded_copy_ = (fs::temp_directory_path() /
+                      ("pmfrag_padded_" + std::to_string(::getpid()) + "_" + fs::path(path).filename().string()))
+                         .string();
+      fs::copy_file(path, padded_copy_, fs::copy_options::overwrite_existing, ec);
+      if (!ec) fs::resize_file(padded_copy_, eof, ec);
+      if (!ec) file_ = H5Fopen(padded_copy_.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+      limit = size;
+      damage_ = "truncated: " + std::to_string(size) + " of " + std::to_string(eof) + " bytes";
+    }
+    if (file_ < 0) {
+      if (!padded_copy_.empty()) fs::remove(padded_copy_, ec);
+      throw std::runtime_error(path + ": cannot open as HDF5" + (damage_.empty() ? "" : " (" + damage_ + ")"));
+    }
+  }
   hid_t d = H5Dopen2(file_, "/particles/all/position/value", H5P_DEFAULT);
   if (d < 0) throw std::runtime_error(path + ": not an H5MD trajectory (no /particles/all/position)");
   const auto dims = dims_of(d);
@@ -354,10 +421,28 @@ H5mdReader::H5mdReader(const std::string& path) {
   // The step/time series can be shorter than value if a run was killed mid-frame: trust the shortest.
   hid_t t = H5Dopen2(file_, "/particles/all/position/time", H5P_DEFAULT);
   if (t >= 0) frames_ = std::min(frames_, static_cast<long>(dims_of(t)[0])), H5Dclose(t);
+  if (limit > 0) {
+    long ok = 0;
+    while (ok < frames_) {
+      const hsize_t k = static_cast<hsize_t>(ok);
+      if (!chunk_before(file_, "/particles/all/position/value", k, limit) ||
+          !chunk_before(file_, "/particles/all/velocity/value", k, limit) ||
+          !chunk_before(file_, "/particles/all/position/time", k, limit) ||
+          !chunk_before(file_, "/particles/all/position/step", k, limit))
+        break;
+      ++ok;
+    }
+    damage_ += "; " + std::to_string(ok) + " of " + std::to_string(frames_) + " frames lie before the cut";
+    frames_ = ok;
+  }
 }
 
 H5mdReader::~H5mdReader() {
   if (file_ >= 0) H5Fclose(file_);
+  if (!padded_copy_.empty()) {
+    std::error_code ec;
+    std::filesystem::remove(padded_copy_, ec);
+  }
 }
 
 TrajectoryFrame H5mdReader::frame(long index) const {
@@ -380,6 +465,12 @@ TrajectoryFrame H5mdReader::frame(long index) const {
   f.step = steps[static_cast<std::size_t>(index)];
   f.time = times[static_cast<std::size_t>(index)];
   return f;
+}
+
+std::vector<double> H5mdReader::times() const {
+  auto t = read_all<double>(file_, "/particles/all/position/time");
+  t.resize(static_cast<std::size_t>(frames_));
+  return t;
 }
 
 std::vector<std::array<int, 2>> H5mdReader::bonds() const {

@@ -50,14 +50,23 @@ struct TrajectoryFrame {
   std::vector<double> position, velocity;  ///< N x dim
 };
 
+/// Reads a trajectory, including a damaged one: a file cut short (a copy that stopped, a full disk) is read
+/// from a zero-padded temporary copy, and only the leading frames whose data lie wholly before the cut are
+/// offered; a frame whose bytes were altered fails its Fletcher-32 checksum when read (frame() throws).
+/// damage() says what was found ("" for an intact file).
 class H5mdReader {
  public:
   explicit H5mdReader(const std::string& path);
   ~H5mdReader();
+  H5mdReader(const H5mdReader&) = delete;
+  H5mdReader& operator=(const H5mdReader&) = delete;
+  const std::string& damage() const { return damage_; }
   int dim() const { return dim_; }
   std::size_t particles() const { return n_; }
   long frames() const { return frames_; }
   TrajectoryFrame frame(long index) const;
+  /// Times of the frames [s] (cheap: no particle data is read).
+  std::vector<double> times() const;
   std::vector<std::array<int, 2>> bonds() const;
   std::vector<int> species() const;
   std::vector<double> mass() const;
@@ -74,6 +83,7 @@ class H5mdReader {
   int dim_ = 2;
   std::size_t n_ = 0;
   long frames_ = 0;
+  std::string damage_, padded_copy_;
 };
 
 /// Everything needed to continue a run bitwise: the step, r_k, v_k-1/2, the effects' history and how many
