@@ -7,13 +7,15 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 scene="$src/cases/impact.toml"
 fail=0
-"$pmfrag" run "$scene" --out "$work/whole" -q --set time.end=6e-3 > /dev/null || exit 1
+# A fixed step (the scene's r_min = 0.5 r0 clamp, dt = 0.5 x its limit): ~130 000 steps, long enough to kill.
+fixed=(--set 'time.dt="auto"' --set pair.r_min=0.5 --set time.end=6e-3)
+"$pmfrag" run "$scene" --out "$work/whole" -q "${fixed[@]}" > /dev/null || exit 1
 for delay in 0.02 0.$((RANDOM % 4 + 2)); do
   rm -rf "$work/cut"
-  timeout -s KILL "$delay" "$pmfrag" run "$scene" --out "$work/cut" -q --threads 1 --set time.end=6e-3 > /dev/null 2>&1
+  timeout -s KILL "$delay" "$pmfrag" run "$scene" --out "$work/cut" -q --threads 1 "${fixed[@]}" > /dev/null 2>&1
   echo "killed after ${delay}s: $(ls "$work/cut" 2>/dev/null | tr '\n' ' ')"
   if [ ! -f "$work/cut/trajectory.h5" ]; then
-    "$pmfrag" run "$scene" --out "$work/cut" -q --set time.end=6e-3 > /dev/null || { echo "FAIL: rerun"; fail=1; }
+    "$pmfrag" run "$scene" --out "$work/cut" -q "${fixed[@]}" > /dev/null || { echo "FAIL: rerun"; fail=1; }
   else
     # the killed trajectory is readable up to its last flushed frame
     h5ls -r "$work/cut/trajectory.h5" > /dev/null || { echo "FAIL: killed trajectory unreadable"; fail=1; }
@@ -27,7 +29,7 @@ for delay in 0.02 0.$((RANDOM % 4 + 2)); do
 done
 # SIGINT (and SIGTERM alike): a checkpoint at that step, exit code 130, and the resumed run is identical.
 rm -rf "$work/int"
-"$pmfrag" run "$scene" --out "$work/int" -q --set time.end=6e-3 > /dev/null 2>&1 &
+"$pmfrag" run "$scene" --out "$work/int" -q "${fixed[@]}" > /dev/null 2>&1 &
 pid=$!
 sleep 0.$((RANDOM % 3 + 2))
 kill -INT $pid
@@ -45,6 +47,21 @@ else
   done
   echo "SIGINT: exit 130, checkpoint, resumed identically"
 fi
+# Adaptive steps (a 1000 cm/s impact: the step changes level): time, step and level history are resumed too.
+adaptive=(--set 'time.dt="adaptive"' --set 'impactor.0.velocity=[0.0,-1000.0]' --set time.end=4e-3 --set output.every=2e-5)
+"$pmfrag" run "$scene" --out "$work/awhole" -q "${adaptive[@]}" > /dev/null || exit 1
+rm -rf "$work/acut"
+timeout -s KILL 0.$((RANDOM % 3 + 2)) "$pmfrag" run "$scene" --out "$work/acut" -q --threads 1 "${adaptive[@]}" > /dev/null 2>&1
+if [ -f "$work/acut/trajectory.h5" ]; then
+  echo "adaptive run killed: $(ls "$work/acut" | tr '\n' ' ')"
+  "$pmfrag" run --resume "$work/acut" -q > /dev/null || { echo "FAIL: adaptive resume"; fail=1; }
+else
+  "$pmfrag" run "$scene" --out "$work/acut" -q "${adaptive[@]}" > /dev/null || { echo "FAIL: adaptive rerun"; fail=1; }
+fi
+for obj in /particles/all/position /particles/all/velocity /observables; do
+  h5diff -q "$work/awhole/trajectory.h5" "$work/acut/trajectory.h5" "$obj" "$obj" || { echo "FAIL: $obj differs after adaptive resume"; fail=1; }
+done
+echo "adaptive: $(grep -o '"steps": [0-9]*' "$work/awhole/run.json"), resumed identically"
 out=$("$pmfrag" run --resume "$work/cut")
 echo "$out" | grep -q "already finished" || { echo "FAIL: finished run not recognised: $out"; fail=1; }
 [ $fail -eq 0 ] && echo "resume is bitwise identical"

@@ -267,8 +267,9 @@ StepChoice choose_step(const Scene& scene, const System& sys) {
   c.limit = c.lattice_factor * c.pair_limit;
   c.adaptive = scene.time.adaptive;
   if (scene.time.adaptive)
+    // 0.9: headroom, so the slight compression of a body at rest does not already halve every step.
     c.dt = scene.time.dt_max > 0.0 ? scene.time.dt_max
-                                   : scene.time.safety * c.lattice_factor * pair_dt_limit(sys, false);
+                                   : 0.9 * scene.time.safety * c.lattice_factor * pair_dt_limit(sys, false);
   else
     c.dt = scene.time.auto_dt ? scene.time.safety * c.limit : scene.time.dt;
   return c;

@@ -85,7 +85,7 @@ struct TimeSpec {
   bool auto_dt = false;
   bool adaptive = false;  ///< dt = "adaptive": each step safety x Eq. 15 at the closest approach present
   double dt = 1e-7;      ///< s (when neither auto nor adaptive)
-  double dt_max = 0.0;   ///< s, adaptive: the cap (0: safety x the stretch limit at r0)
+  double dt_max = 0.0;   ///< s, adaptive: the cap (0: 0.9 x safety x the stretch limit at r0)
   double safety = 0.5;   ///< auto and adaptive: dt = safety x the Eq. 15 limit
   double end = 0.0;      ///< s
 };
