@@ -8,7 +8,9 @@ trap 'rm -rf "$work"' EXIT
 scene="$src/cases/impact.toml"
 fail=0
 # A fixed step (the scene's r_min = 0.5 r0 clamp, dt = 0.5 x its limit): ~130 000 steps, long enough to kill.
-fixed=(--set 'time.dt="auto"' --set pair.r_min=0.5 --set time.end=6e-3)
+# PMFRAG_TEST_SCALE (the sanitized CI build: 0.1) shortens the runs.
+scale=${PMFRAG_TEST_SCALE:-1}
+fixed=(--set 'time.dt="auto"' --set pair.r_min=0.5 --set time.end=$(awk "BEGIN { print 6e-3 * $scale }"))
 "$pmfrag" run "$scene" --out "$work/whole" -q "${fixed[@]}" > /dev/null || exit 1
 for delay in 0.02 0.$((RANDOM % 4 + 2)); do
   rm -rf "$work/cut"
@@ -48,7 +50,7 @@ else
   echo "SIGINT: exit 130, checkpoint, resumed identically"
 fi
 # Adaptive steps (a 1000 cm/s impact: the step changes level): time, step and level history are resumed too.
-adaptive=(--set 'time.dt="adaptive"' --set 'impactor.0.velocity=[0.0,-1000.0]' --set time.end=4e-3 --set output.every=2e-5)
+adaptive=(--set 'time.dt="adaptive"' --set 'impactor.0.velocity=[0.0,-1000.0]' --set time.end=$(awk "BEGIN { print 4e-3 * ($scale < 0.5 ? 0.5 : $scale) }") --set output.every=2e-5)
 "$pmfrag" run "$scene" --out "$work/awhole" -q "${adaptive[@]}" > /dev/null || exit 1
 rm -rf "$work/acut"
 timeout -s KILL 0.$((RANDOM % 3 + 2)) "$pmfrag" run "$scene" --out "$work/acut" -q --threads 1 "${adaptive[@]}" > /dev/null 2>&1

@@ -6,10 +6,21 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <string>
 
 namespace pmfrag::test {
+
+/// PMFRAG_TEST_SCALE (default 1) shortens the hard cases' runs; the sanitized CI build sets 0.1 so that the
+/// same tests walk the same code under ASan/UBSan in minutes. The physics thresholds hold at either length.
+inline double test_scale() {
+  const char* s = std::getenv("PMFRAG_TEST_SCALE");
+  const double v = s ? std::atof(s) : 1.0;
+  return v > 0.0 && v <= 1.0 ? v : 1.0;
+}
+inline long scaled(long n) { return std::max(1L, static_cast<long>(static_cast<double>(n) * test_scale())); }
 
 inline std::string case_path(const std::string& name) { return std::string(PMFRAG_SOURCE_DIR) + "/cases/" + name; }
 
