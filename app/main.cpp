@@ -5,6 +5,7 @@
 #include "cmd_render.hpp"
 #include "cmd_run.hpp"
 #include "cmd_scene.hpp"
+#include "cmd_study.hpp"
 #include "parse.hpp"
 
 #include <CLI/CLI.hpp>
@@ -23,6 +24,7 @@ int main(int argc, char** argv) {
   pmfrag::app::add_fragments_command(app);
   pmfrag::app::add_export_command(app);
   pmfrag::app::add_render_command(app);
+  pmfrag::app::add_study_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

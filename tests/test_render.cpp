@@ -1,4 +1,5 @@
 // Headless rendering: sizes, colours at the particles' projected positions, background elsewhere, labels.
+#include "pmfrag/render/charts.hpp"
 #include "pmfrag/render/frames.hpp"
 #include "test_helpers.hpp"
 
@@ -85,5 +86,28 @@ TEST(Render, ParticlesAppearWhereProjectedInTheirColours) {
   EXPECT_GT(ink(ia, 0, 120, 270, 300), 20) << "time label";
   EXPECT_GT(ink(ia, 300, 390, 30, 270), 200) << "colour bar";
   EXPECT_GT(ink(ia, 0, 60, 0, 30), 10) << "scale bar";
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Render, ChartDrawsEachCurveInItsColour) {
+  const auto dir = test::temp_dir("chart");
+  render::HeadlessWindow window(400, 300);
+  for (bool log : {false, true}) {
+    const render::ChartSpec chart{"t", "x [s]", "y", log, log,
+                                  {{"a", {1, 10, 100}, {1e-1, 1e-2, 1e-3}}, {"b", {1, 10, 100}, {1e-3, 1e-2, 1e-1}}}};
+    const std::string png = (dir / (log ? "log.png" : "lin.png")).string();
+    render::render_chart_png(window, chart, 400, 300, png);
+    const Image im = read_png(png);
+    ASSERT_EQ(im.w, 400);
+    int blue = 0, vermillion = 0;  // Okabe-Ito (0,114,178) and (213,94,0)
+    for (int x = 0; x < im.w; ++x)
+      for (int y = 0; y < im.h; ++y) {
+        const auto c = im.at(x, y);
+        blue += std::abs(c[0] - 0) < 30 && std::abs(c[1] - 114) < 30 && std::abs(c[2] - 178) < 30;
+        vermillion += std::abs(c[0] - 213) < 30 && std::abs(c[1] - 94) < 30 && std::abs(c[2] - 0) < 30;
+      }
+    EXPECT_GT(blue, 300) << (log ? "log" : "linear") << " axes: curve a";
+    EXPECT_GT(vermillion, 300) << (log ? "log" : "linear") << " axes: curve b";
+  }
   std::filesystem::remove_all(dir);
 }

@@ -1,5 +1,7 @@
 #include "pmfrag/render/frames.hpp"
 
+#include "png.hpp"
+
 #include <vtkActor.h>
 #include <vtkActor2D.h>
 #include <vtkCellArray.h>
@@ -7,7 +9,6 @@
 #include <vtkGenericOpenGLRenderWindow.h>
 #include <vtkLookupTable.h>
 #include <vtkNew.h>
-#include <vtkPNGWriter.h>
 #include <vtkPointData.h>
 #include <vtkPointGaussianMapper.h>
 #include <vtkPoints.h>
@@ -21,7 +22,6 @@
 #include <vtkTextProperty.h>
 #include <vtkCamera.h>
 #include <vtkCoordinate.h>
-#include <vtkWindowToImageFilter.h>
 
 #include <algorithm>
 #include <cmath>
@@ -228,20 +228,7 @@ void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, co
   }
   win->Render();
 
-  vtkNew<vtkWindowToImageFilter> grab;
-  grab->SetInput(win);
-  grab->SetInputBufferTypeToRGB();
-  grab->ReadFrontBufferOff();
-  grab->ShouldRerenderOff();
-  grab->Update();
-  const std::string tmp = png_path + ".tmp.png";
-  vtkNew<vtkPNGWriter> png;
-  png->SetCompressionLevel(compression);
-  png->SetFileName(tmp.c_str());
-  png->SetInputConnection(grab->GetOutputPort());
-  png->Write();
-  if (png->GetErrorCode() != 0) throw std::runtime_error(png_path + ": PNG writer failed");
-  std::filesystem::rename(tmp, png_path);
+  detail::write_window_png(win, png_path, compression);
 }
 
 }  // namespace pmfrag::render

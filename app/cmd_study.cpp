@@ -1,0 +1,231 @@
+// `pmfrag study accuracy SCENE --out DIR`: the same scene at several time steps and lattice spacings; for
+// each run the wall time and what it bought (energy balance, positions before fracture, onset time, fragment
+// count) against the finest run of its knob. Wiring only: runs are sim/, fragments are analysis/, the chart
+// is render/.
+#include "cmd_study.hpp"
+
+#include "parse.hpp"
+#include "pmfrag/analysis/fragments.hpp"
+#include "pmfrag/h5md.hpp"
+#include "pmfrag/render/charts.hpp"
+#include "pmfrag/run.hpp"
+#include "pmfrag/system.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+namespace pmfrag::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct StudyCli {
+  std::string scene, out, dts, r0s, png;
+  std::vector<std::string> set;
+  int threads = 0;
+};
+
+struct Row {
+  std::string knob;  // "dt" or "r0"
+  double value = 0, dt = 0, r0 = 0;
+  std::size_t particles = 0;
+  long steps = 0;
+  double wall = 0, pss = 0, energy_error = NAN, position_error = NAN, onset = NAN, onset_error = NAN,
+         separation = NAN;
+  long fragments = 0;
+  fs::path dir;
+};
+
+std::vector<double> number_list(const std::string& option, const std::string& text) {
+  std::vector<double> out;
+  std::stringstream ss(text);
+  for (std::string item; std::getline(ss, item, ',');) {
+    std::size_t used = 0;
+    double v = NAN;
+    try {
+      v = std::stod(item, &used);
+    } catch (const std::exception&) {
+    }
+    if (used != item.size() || !(v > 0)) throw UsageError(option + ": '" + item + "' is not a positive number");
+    out.push_back(v);
+  }
+  if (out.empty()) throw UsageError(option + ": give at least one value");
+  return out;
+}
+
+std::string num(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.6g", v);
+  return b;
+}
+
+// Positions at time t, from the frame nearest t moved along its velocity (frames of runs with different dt
+// do not fall on the same times).
+std::vector<double> positions_at(const H5mdReader& rd, double t) {
+  const auto times = rd.times();
+  long best = 0;
+  for (long k = 1; k < static_cast<long>(times.size()); ++k)
+    if (std::fabs(times[static_cast<std::size_t>(k)] - t) < std::fabs(times[static_cast<std::size_t>(best)] - t)) best = k;
+  const TrajectoryFrame f = rd.frame(best);
+  std::vector<double> x = f.position;
+  for (std::size_t i = 0; i < x.size(); ++i) x[i] += f.velocity[i] * (t - f.time);
+  return x;
+}
+
+Row run_one(const StudyCli& o, const std::string& knob, double value, const std::vector<std::string>& extra) {
+  Row row;
+  row.knob = knob;
+  row.value = value;
+  row.dir = fs::path(o.out) / (knob + "_" + num(value));
+  std::vector<std::string> set = o.set;
+  set.insert(set.end(), extra.begin(), extra.end());
+  const Scene sc = read_scene(o.scene, set);
+  RunOptions ro;
+  ro.out_dir = row.dir.string();
+  ro.force = true;
+  const RunResult r = run_scene(sc, ro);
+  if (!r.completed) throw std::runtime_error(row.dir.string() + ": run stopped: " + r.message);
+  const System sys = build_system(sc);
+  row.dt = r.dt, row.r0 = sys.r0, row.particles = r.particles, row.steps = r.steps, row.wall = r.wall_s;
+  row.pss = r.particle_steps_per_s();
+  row.onset = r.first_break_time >= 0 ? r.first_break_time : NAN;
+  H5mdReader rd((row.dir / "trajectory.h5").string());
+  const auto bal = rd.observable("energy_balance"), work = rd.observable("boundary_work");
+  double worst = 0;
+  for (double b : bal) worst = std::max(worst, std::fabs(b - bal.front()));
+  row.energy_error = work.back() > 0 ? worst / work.back() : NAN;
+  const auto rep = analysis::analyse_fragments((row.dir / "trajectory.h5").string(), {});
+  row.fragments = rep.timeline.back().fragments_2plus;
+  row.separation = rep.separation_time >= 0 ? rep.separation_time : NAN;
+  std::printf("  %s = %-9s dt %.3g s, r0 %.3g cm, %zu particles, %ld steps, %.2f s wall, onset %.6g s, %ld fragments\n",
+              knob.c_str(), num(value).c_str(), row.dt, row.r0, row.particles, row.steps, row.wall, row.onset,
+              row.fragments);
+  std::fflush(stdout);
+  return row;
+}
+
+void study_accuracy(const StudyCli& o) {
+  if (o.threads > 0) omp_set_num_threads(o.threads);
+  const Scene sc = read_scene(o.scene, o.set);
+  const System sys = build_system(sc);
+  const double limit = choose_step(sc, sys).limit;
+  fs::create_directories(o.out);
+  std::vector<Row> rows;
+
+  // Time step: from 1e-8 s to near the limit; the finest run is the reference.
+  std::vector<double> dts = o.dts.empty() ? std::vector<double>{1e-8, 2e-8, 5e-8, 1e-7, 2e-7, 0.9 * limit}
+                                          : number_list("--dt", o.dts);
+  std::sort(dts.begin(), dts.end());
+  dts.erase(std::remove_if(dts.begin(), dts.end(), [&](double d) { return d > limit; }), dts.end());
+  if (dts.empty()) throw UsageError("--dt: every value is above the stability limit " + num(limit) + " s");
+  std::printf("time step (stability limit %.4g s):\n", limit);
+  std::vector<Row> by_dt;
+  for (double dt : dts) by_dt.push_back(run_one(o, "dt", dt, {"time.dt=" + num(dt)}));
+  const Row& ref = by_dt.front();
+  if (std::isfinite(ref.onset)) {
+    const double t_pre = 0.8 * ref.onset;
+    H5mdReader rr((ref.dir / "trajectory.h5").string());
+    const auto x_ref = positions_at(rr, t_pre), x0 = rr.frame(0).position;
+    double disp2 = 0;
+    for (std::size_t i = 0; i < x_ref.size(); ++i) disp2 += (x_ref[i] - x0[i]) * (x_ref[i] - x0[i]);
+    for (auto& row : by_dt) {
+      H5mdReader rd((row.dir / "trajectory.h5").string());
+      const auto x = positions_at(rd, t_pre);
+      double e2 = 0;
+      for (std::size_t i = 0; i < x.size(); ++i) e2 += (x[i] - x_ref[i]) * (x[i] - x_ref[i]);
+      row.position_error = std::sqrt(e2 / disp2);
+      row.onset_error = std::fabs(row.onset - ref.onset) / ref.onset;
+    }
+  }
+  rows.insert(rows.end(), by_dt.begin(), by_dt.end());
+
+  // Lattice spacing: the same body at several r0, each at a quarter of its own limit; finest r0 = reference.
+  const bool can_scale = !sc.bodies.empty() && sc.bodies.front().lattice != LatticeKind::greenspan_plate;
+  std::vector<double> r0s = o.r0s.empty() ? std::vector<double>{0.4, 0.2, 0.1} : number_list("--r0", o.r0s);
+  std::sort(r0s.begin(), r0s.end());
+  if (!can_scale) {
+    std::printf("lattice spacing: skipped (the Greenspan mesh has a fixed r0; use a rect-lattice scene such as "
+                "cases/slit_plate_rect_7_14.toml)\n");
+  } else {
+    std::printf("lattice spacing:\n");
+    std::vector<Row> by_r0;
+    for (double r0 : r0s) {
+      std::vector<std::string> extra;
+      for (std::size_t b = 0; b < sc.bodies.size(); ++b) extra.push_back("body." + std::to_string(b) + ".r0=" + num(r0));
+      const Scene scaled = read_scene(o.scene, [&] {
+        auto s = o.set;
+        s.insert(s.end(), extra.begin(), extra.end());
+        return s;
+      }());
+      const double lim = choose_step(scaled, build_system(scaled)).limit;
+      extra.push_back("time.dt=" + num(0.25 * lim));
+      by_r0.push_back(run_one(o, "r0", r0, extra));
+    }
+    const Row& fine = by_r0.front();
+    for (auto& row : by_r0)
+      if (std::isfinite(fine.onset)) row.onset_error = std::fabs(row.onset - fine.onset) / fine.onset;
+    rows.insert(rows.end(), by_r0.begin(), by_r0.end());
+  }
+
+  const fs::path csv = fs::path(o.out) / "accuracy.csv";
+  {
+    std::ofstream f(csv.string() + ".tmp");
+    f << "knob,value,dt_s,r0_cm,particles,steps,wall_s,particle_steps_per_s,energy_error_of_work,"
+         "position_error_rel,onset_s,onset_rel_error,separation_s,fragments\n";
+    for (const auto& r : rows)
+      f << r.knob << "," << num(r.value) << "," << num(r.dt) << "," << num(r.r0) << "," << r.particles << "," << r.steps
+        << "," << num(r.wall) << "," << num(r.pss) << "," << num(r.energy_error) << "," << num(r.position_error) << ","
+        << num(r.onset) << "," << num(r.onset_error) << "," << num(r.separation) << "," << r.fragments << "\n";
+  }
+  fs::rename(csv.string() + ".tmp", csv);
+
+  render::ChartSpec chart;
+  chart.title = "What accuracy costs: error against wall time (" + fs::path(o.scene).filename().string() + ")";
+  chart.x_label = "wall time [s] (2 cores)";
+  chart.y_label = "relative error against the finest run";
+  chart.log_x = chart.log_y = true;
+  render::Series dt_pos{"dt: positions at 0.8 x onset", {}, {}}, dt_onset{"dt: onset time", {}, {}},
+      r0_onset{"r0: onset time", {}, {}};
+  for (const auto& r : rows) {
+    if (r.knob == "dt") {
+      dt_pos.x.push_back(r.wall), dt_pos.y.push_back(r.position_error);
+      dt_onset.x.push_back(r.wall), dt_onset.y.push_back(r.onset_error);
+    } else {
+      r0_onset.x.push_back(r.wall), r0_onset.y.push_back(r.onset_error);
+    }
+  }
+  chart.series = {dt_pos, dt_onset};
+  if (!r0_onset.x.empty()) chart.series.push_back(r0_onset);
+  const std::string png = o.png.empty() ? (fs::path(o.out) / "accuracy.png").string() : o.png;
+  render::HeadlessWindow window(1000, 700);
+  render::render_chart_png(window, chart, 1000, 700, png);
+  std::printf("wrote %s and %s\n", csv.c_str(), png.c_str());
+}
+
+}  // namespace
+
+void add_study_command(CLI::App& app) {
+  auto* study = app.add_subcommand("study", "Comparative studies: accuracy against wall time");
+  study->require_subcommand(1);
+  auto o = std::make_shared<StudyCli>();
+  auto* acc = study->add_subcommand(
+      "accuracy", "Run SCENE at several dt and r0; write accuracy.csv and a Pareto chart (error vs wall time)");
+  acc->add_option("scene", o->scene, "Scene file (TOML)")->required()->check(CLI::ExistingFile);
+  acc->add_option("--out", o->out, "Folder for the runs, accuracy.csv and accuracy.png")->required();
+  acc->add_option("--dt", o->dts, "Time steps [s], comma-separated (default 1e-8,2e-8,5e-8,1e-7,2e-7,0.9 x limit)");
+  acc->add_option("--r0", o->r0s, "Lattice spacings [cm] (default 0.4,0.2,0.1; not for the Greenspan mesh)");
+  acc->add_option("--set", o->set, "Override a scene key for every run, e.g. --set time.end=1.2e-2");
+  acc->add_option("--png", o->png, "Where to write the chart (default OUT/accuracy.png)");
+  acc->add_option("--threads", o->threads, "OpenMP threads per run (default: all cores)");
+  acc->callback([o] { study_accuracy(*o); });
+}
+
+}  // namespace pmfrag::app

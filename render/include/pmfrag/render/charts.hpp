@@ -1,0 +1,27 @@
+// Line charts for studies (accuracy against wall time, quantities over (p,q)): VTK's 2-D charts drawn into
+// the headless window, written as PNG. Axes carry their units in the labels; a legend names each curve.
+#pragma once
+
+#include "pmfrag/render/headless.hpp"
+
+#include <string>
+#include <vector>
+
+namespace pmfrag::render {
+
+struct Series {
+  std::string name;
+  std::vector<double> x, y;
+};
+
+struct ChartSpec {
+  std::string title, x_label, y_label;
+  bool log_x = false, log_y = false;
+  std::vector<Series> series;
+};
+
+/// Renders `chart` at w x h pixels into `png_path` (written to a temporary name and renamed). Points with a
+/// non-positive coordinate on a log axis are left out.
+void render_chart_png(HeadlessWindow& window, const ChartSpec& chart, int w, int h, const std::string& png_path);
+
+}  // namespace pmfrag::render
