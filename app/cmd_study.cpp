@@ -41,6 +41,7 @@ struct Row {
   double wall = 0, pss = 0, energy_error = NAN, position_error = NAN, onset = NAN, onset_error = NAN,
          separation = NAN;
   long fragments = 0;
+  std::string status = "completed";  // or why the run stopped (the guard): kept in the CSV, left off the chart
   fs::path dir;
 };
 
@@ -92,7 +93,7 @@ Row run_one(const StudyCli& o, const std::string& knob, double value, const std:
   ro.out_dir = row.dir.string();
   ro.force = true;
   const RunResult r = run_scene(sc, ro);
-  if (!r.completed) throw std::runtime_error(row.dir.string() + ": run stopped: " + r.message);
+  if (!r.completed) row.status = "stopped: " + r.message;
   const System sys = build_system(sc);
   row.dt = r.dt, row.r0 = sys.r0, row.particles = r.particles, row.steps = r.steps, row.wall = r.wall_s;
   row.pss = r.particle_steps_per_s();
@@ -105,9 +106,9 @@ Row run_one(const StudyCli& o, const std::string& knob, double value, const std:
   const auto rep = analysis::analyse_fragments((row.dir / "trajectory.h5").string(), {});
   row.fragments = rep.timeline.back().fragments_2plus;
   row.separation = rep.separation_time >= 0 ? rep.separation_time : NAN;
-  std::printf("  %s = %-9s dt %.3g s, r0 %.3g cm, %zu particles, %ld steps, %.2f s wall, onset %.6g s, %ld fragments\n",
+  std::printf("  %s = %-9s dt %.3g s, r0 %.3g cm, %zu particles, %ld steps, %.2f s wall, onset %.6g s, %ld fragments%s\n",
               knob.c_str(), num(value).c_str(), row.dt, row.r0, row.particles, row.steps, row.wall, row.onset,
-              row.fragments);
+              row.fragments, row.status == "completed" ? "" : (" - " + row.status).c_str());
   std::fflush(stdout);
   return row;
 }
@@ -179,11 +180,12 @@ void study_accuracy(const StudyCli& o) {
   {
     std::ofstream f(csv.string() + ".tmp");
     f << "knob,value,dt_s,r0_cm,particles,steps,wall_s,particle_steps_per_s,energy_error_of_work,"
-         "position_error_rel,onset_s,onset_rel_error,separation_s,fragments\n";
+         "position_error_rel,onset_s,onset_rel_error,separation_s,fragments,status\n";
     for (const auto& r : rows)
       f << r.knob << "," << num(r.value) << "," << num(r.dt) << "," << num(r.r0) << "," << r.particles << "," << r.steps
         << "," << num(r.wall) << "," << num(r.pss) << "," << num(r.energy_error) << "," << num(r.position_error) << ","
-        << num(r.onset) << "," << num(r.onset_error) << "," << num(r.separation) << "," << r.fragments << "\n";
+        << num(r.onset) << "," << num(r.onset_error) << "," << num(r.separation) << "," << r.fragments << ",\""
+        << r.status << "\"\n";
   }
   fs::rename(csv.string() + ".tmp", csv);
 
@@ -195,6 +197,7 @@ void study_accuracy(const StudyCli& o) {
   render::Series dt_pos{"dt: positions at 0.8 x onset", {}, {}}, dt_onset{"dt: onset time", {}, {}},
       r0_onset{"r0: onset time", {}, {}};
   for (const auto& r : rows) {
+    if (r.status != "completed") continue;
     if (r.knob == "dt") {
       dt_pos.x.push_back(r.wall), dt_pos.y.push_back(r.position_error);
       dt_onset.x.push_back(r.wall), dt_onset.y.push_back(r.onset_error);

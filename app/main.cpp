@@ -6,6 +6,7 @@
 #include "cmd_run.hpp"
 #include "cmd_scene.hpp"
 #include "cmd_study.hpp"
+#include "cmd_sweep.hpp"
 #include "parse.hpp"
 
 #include <CLI/CLI.hpp>
@@ -25,6 +26,7 @@ int main(int argc, char** argv) {
   pmfrag::app::add_export_command(app);
   pmfrag::app::add_render_command(app);
   pmfrag::app::add_study_command(app);
+  pmfrag::app::add_sweep_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

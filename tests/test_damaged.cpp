@@ -29,7 +29,7 @@ fs::path intact_run() {
     const fs::path d = test::temp_dir("damaged_src");
     RunOptions ro;
     ro.out_dir = d.string();
-    const RunResult r = run_scene(read_scene(test::case_path("slit_plate_3_5.toml"), {"time.end=2e-3"}), ro);
+    const RunResult r = run_scene(read_scene(test::case_path("slit_plate_3_5.toml"), {"time.end=2e-3", "time.dt=2e-7"}), ro);
     EXPECT_TRUE(r.completed);
     return d;
   }();

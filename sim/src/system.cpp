@@ -206,8 +206,10 @@ double pair_dt_limit(const System& sys, bool at_r_min) {
 
 double lattice_dt_limit(const System& sys) {
   // Power iteration on A = M^-1/2 K M^-1/2 (symmetric, same eigenvalues as M^-1 K). Each bond is a spring
-  // along its direction with the law's stiffness -dF/dr at its initial length. The Rayleigh quotient after
-  // n iterations weighs an eigenvalue 1% below the top by 0.99^(2n): 400 iterations land within about 1%.
+  // along its direction with the law's stiffness -dF/dr at its initial length. The Rayleigh quotient rises
+  // towards lambda_max; it stops once it gains less than 1e-4 in 20 iterations (at most 400), and lambda is
+  // raised by 1 % for what it may still lack (measured: the plate's factor 0.4087 at 400 iterations, the bulk
+  // value 1/sqrt(6) = 0.4082).
   const std::size_t n = sys.size();
   if (sys.bonds.empty()) return INFINITY;
   const int D = sys.dim;
@@ -234,8 +236,12 @@ double lattice_dt_limit(const System& sys) {
       seed = seed * 6364136223846793005ull + 1442695040888963407ull;
       x[d] = static_cast<double>(seed >> 11) * 0x1.0p-53 - 0.5;
     }
-  double lambda = 0.0;
+  double lambda = 0.0, checked = 0.0;
   for (int it = 0; it < 400; ++it) {
+    if (it % 20 == 0 && it >= 60) {
+      if (lambda - checked < 1e-4 * lambda) break;
+      checked = lambda;
+    }
     double norm2 = 0.0;
     for (const auto& x : v) norm2 += x.squaredNorm();
     const double inv = 1.0 / std::sqrt(norm2);
@@ -250,7 +256,7 @@ double lattice_dt_limit(const System& sys) {
     for (std::size_t i = 0; i < n; ++i) lambda += v[i].dot(Av[i]);
     std::swap(v, Av);
   }
-  return lambda > 0.0 ? 2.0 / std::sqrt(lambda) : INFINITY;
+  return lambda > 0.0 ? 2.0 / std::sqrt(1.01 * lambda) : INFINITY;
 }
 
 double lattice_factor(const System& sys) {

@@ -1,0 +1,212 @@
+// `pmfrag sweep SPEC.toml --out DIR`: every case of a sweep spec in its own folder (trajectory, fragments,
+// summary), run by a local pool of worker processes (`pmfrag run` then `pmfrag fragments`, so a case that
+// crashes takes nothing else down), and one sweep.csv. Finished cases are skipped on rerun; a failed case is
+// recorded with its error and the others go on. Wiring only.
+#include "cmd_sweep.hpp"
+
+#include "parse.hpp"
+#include "pmfrag/material.hpp"
+#include "pmfrag/scene.hpp"
+#include "pmfrag/sweep.hpp"
+#include "pmfrag/system.hpp"
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <memory>
+#include <set>
+#include <thread>
+
+extern char** environ;
+
+namespace pmfrag::app {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct SweepCli {
+  std::string spec, out;
+  std::vector<std::string> pairs, set;
+  int jobs = 0;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// A number or string from our own flat JSON files (run.json, summary.json).
+double json_number(const std::string& text, const std::string& key) {
+  const auto at = text.find("\"" + key + "\":");
+  if (at == std::string::npos) return NAN;
+  return std::strtod(text.c_str() + at + key.size() + 3, nullptr);
+}
+std::string json_string(const std::string& text, const std::string& key) {
+  const auto at = text.find("\"" + key + "\": \"");
+  if (at == std::string::npos) return "";
+  const auto from = at + key.size() + 5;
+  std::string out;
+  for (std::size_t k = from; k < text.size() && text[k] != '"'; ++k) {
+    if (text[k] == '\\' && k + 1 < text.size()) ++k;
+    out += text[k];
+  }
+  return out;
+}
+
+bool finished(const fs::path& dir) {
+  return fs::exists(dir / "summary.json") && slurp(dir / "run.json").find("\"completed\": true") != std::string::npos;
+}
+
+pid_t spawn(const std::vector<std::string>& args, const fs::path& log) {
+  std::vector<char*> argv;
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+  posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  pid_t pid = -1;
+  const int rc = posix_spawn(&pid, "/proc/self/exe", &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (rc != 0) throw std::runtime_error("cannot start a worker process for " + log.parent_path().string());
+  return pid;
+}
+
+void sweep(const SweepCli& o) {
+  SweepSpec spec = read_sweep_spec(o.spec);
+  if (!o.pairs.empty()) {
+    std::vector<std::array<int, 2>> keep;
+    for (const auto& text : o.pairs) {
+      const auto pq = parse_ints("--pairs", text, 2);
+      keep.push_back({pq[0], pq[1]});
+    }
+    spec.pairs = keep;
+  }
+  spec.set.insert(spec.set.end(), o.set.begin(), o.set.end());
+  const Scene base = read_scene(spec.base, spec.set);
+  const double r0 = build_system(base).r0;
+  const auto cases = sweep_cases(spec, base.phases.size());
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int jobs = o.jobs > 0 ? o.jobs : std::min<int>(cores, static_cast<int>(cases.size()));
+  const int threads = std::max(1, cores / std::max(1, jobs));
+  fs::create_directories(o.out);
+  std::printf("sweep %s: %zu cases of %s, %d worker processes x %d threads\n", o.spec.c_str(), cases.size(),
+              spec.base.c_str(), jobs, threads);
+
+  std::vector<std::size_t> todo;
+  for (std::size_t c = 0; c < cases.size(); ++c) {
+    const fs::path dir = fs::path(o.out) / cases[c].name;
+    if (finished(dir)) {
+      std::printf("  %-24s finished before: skipped\n", cases[c].name.c_str());
+    } else {
+      fs::remove_all(dir);
+      fs::create_directories(dir);
+      todo.push_back(c);
+    }
+  }
+  std::map<pid_t, std::pair<std::size_t, int>> running;  // pid -> (case, stage: 1 run, 2 fragments)
+  std::size_t next = 0;
+  auto start = [&](std::size_t c, int stage) {
+    const fs::path dir = fs::path(o.out) / cases[c].name;
+    std::vector<std::string> args{"pmfrag"};
+    if (stage == 1) {
+      args.insert(args.end(), {"run", spec.base, "--out", dir.string(), "--force", "-q", "--threads", std::to_string(threads)});
+      for (const auto& s : cases[c].overrides) args.insert(args.end(), {"--set", s});
+    } else {
+      args.insert(args.end(), {"fragments", dir.string()});
+    }
+    running[spawn(args, dir / "log.txt")] = {c, stage};
+  };
+  while (next < todo.size() || !running.empty()) {
+    while (static_cast<int>(running.size()) < jobs && next < todo.size()) start(todo[next++], 1);
+    int status = 0;
+    const pid_t pid = ::wait(&status);
+    if (pid < 0) break;
+    const auto it = running.find(pid);
+    if (it == running.end()) continue;
+    const auto [c, stage] = it->second;
+    running.erase(it);
+    const fs::path dir = fs::path(o.out) / cases[c].name;
+    const bool ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+    if (ok && stage == 1) {
+      start(c, 2);
+      continue;
+    }
+    if (!ok) {
+      std::string why = json_string(slurp(dir / "run.json"), "message");
+      if (why.empty()) {  // the last line the worker printed
+        const std::string log = slurp(dir / "log.txt");
+        auto end = log.find_last_not_of('\n');
+        auto from = end == std::string::npos ? 0 : log.rfind('\n', end);
+        why = end == std::string::npos ? "no output" : log.substr(from == std::string::npos ? 0 : from + 1, end - from);
+      }
+      if (WIFSIGNALED(status)) why = "killed by signal " + std::to_string(WTERMSIG(status)) + "; " + why;
+      std::ofstream(dir / "error.txt") << why << "\n";
+      std::printf("  %-24s FAILED: %s\n", cases[c].name.c_str(), why.c_str());
+    } else {
+      std::printf("  %-24s done\n", cases[c].name.c_str());
+    }
+    std::fflush(stdout);
+  }
+
+  const fs::path csv = fs::path(o.out) / "sweep.csv";
+  {
+    std::ofstream f(csv.string() + ".tmp");
+    f << "case,p,q,E_GPa,sigma_TS_MNm2,dt_s,onset_s,separation_s,fragments_2plus,fragments_1pct_mass,"
+         "largest_mass_fraction,particle_steps_per_s,wall_s,status\n";
+    long failed = 0;
+    for (const auto& k : cases) {
+      const fs::path dir = fs::path(o.out) / k.name;
+      const Material m = derive_material(k.p, k.q, r0);
+      const std::string run = slurp(dir / "run.json"), sum = slurp(dir / "summary.json");
+      std::string status = "completed";
+      if (fs::exists(dir / "error.txt")) {
+        status = slurp(dir / "error.txt");
+        status.erase(status.find_last_not_of('\n') + 1);
+        ++failed;
+      } else if (run.find("\"completed\": true") == std::string::npos) {
+        status = "stopped: " + json_string(run, "message");
+      }
+      for (char& ch : status)
+        if (ch == '"') ch = '\'';
+      auto val = [](double v) {
+        char b[32];
+        std::snprintf(b, sizeof b, "%.6g", v);
+        return std::string(b);
+      };
+      f << k.name << "," << k.p << "," << k.q << "," << val(m.E_GPa) << "," << val(m.sigma_TS_MNm2) << ","
+        << val(json_number(run, "dt_s")) << "," << val(json_number(sum, "onset_time_s")) << ","
+        << val(json_number(sum, "separation_time_s")) << "," << val(json_number(sum, "fragments_2plus")) << ","
+        << val(json_number(sum, "fragments_1pct_mass")) << "," << val(json_number(sum, "largest_mass_fraction")) << ","
+        << val(json_number(run, "particle_steps_per_s")) << "," << val(json_number(run, "wall_s")) << ",\"" << status
+        << "\"\n";
+    }
+    std::printf("wrote %s: %zu cases, %ld failed\n", csv.c_str(), cases.size(), failed);
+  }
+  fs::rename(csv.string() + ".tmp", csv);
+}
+
+}  // namespace
+
+void add_sweep_command(CLI::App& app) {
+  auto o = std::make_shared<SweepCli>();
+  auto* cmd = app.add_subcommand("sweep", "Run a base scene over (p,q) pairs and other keys; gather sweep.csv");
+  cmd->add_option("spec", o->spec, "Sweep spec (TOML: base, pairs, [set], [vary])")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--out", o->out, "Folder for the cases and sweep.csv")->required();
+  cmd->add_option("--pairs", o->pairs, "Only these pairs, e.g. --pairs 3,5 7,14");
+  cmd->add_option("--set", o->set, "Override a scene key in every case");
+  cmd->add_option("--jobs", o->jobs, "Worker processes (default: one per core, each with the remaining threads)");
+  cmd->callback([o] { sweep(*o); });
+}
+
+}  // namespace pmfrag::app
