@@ -111,3 +111,47 @@ TEST(Render, ChartDrawsEachCurveInItsColour) {
   }
   std::filesystem::remove_all(dir);
 }
+
+TEST(Render, MatchesTheCommittedReferenceImage) {
+  // A fixed 5 x 5 patch, three fragments, a title and a time label, rendered with Mesa's software rasterizer
+  // (reproducible), compared with tests/data/reference_frame.png. PMFRAG_UPDATE_REFERENCE=1 rewrites the
+  // reference after an intended change of the pictures (look at it before committing).
+  setenv("LIBGL_ALWAYS_SOFTWARE", "1", 1);
+  const auto dir = test::temp_dir("reference");
+  render::HeadlessWindow window(240, 240);
+  render::View view;
+  view.xmin = view.ymin = 0.0;
+  view.xmax = view.ymax = 0.8;
+  view.radius = 0.09;
+  render::FieldSpec field;
+  field.categorical = true;
+  field.title = "fragment";
+  render::FramePicture pic;
+  for (int i = 0; i < 5; ++i)
+    for (int j = 0; j < 5; ++j) {
+      pic.xyz.insert(pic.xyz.end(), {0.2 * i + 0.1 * (j % 2), 0.2 * j, 0.0});
+      pic.value.push_back(i < 2 ? 0 : (j < 3 ? 1 : 2));
+    }
+  pic.time = 1.5e-3;
+  const std::string png = (dir / "frame.png").string();
+  render::render_png(window, view, field, {pic}, "reference patch", 240, 240, png);
+  const std::string reference = std::string(PMFRAG_SOURCE_DIR) + "/tests/data/reference_frame.png";
+  if (std::getenv("PMFRAG_UPDATE_REFERENCE")) {
+    std::filesystem::copy_file(png, reference, std::filesystem::copy_options::overwrite_existing);
+    GTEST_SKIP() << "reference rewritten: " << reference;
+  }
+  ASSERT_TRUE(std::filesystem::exists(reference)) << reference;
+  const Image got = read_png(png), want = read_png(reference);
+  ASSERT_EQ(got.w, want.w);
+  ASSERT_EQ(got.h, want.h);
+  long differ = 0;
+  for (int x = 0; x < got.w; ++x)
+    for (int y = 0; y < got.h; ++y) {
+      const auto a = got.at(x, y), b = want.at(x, y);
+      int worst = 0;
+      for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(a[c] - b[c]));
+      differ += worst > 16;
+    }
+  EXPECT_LT(differ, got.w * got.h / 100) << differ << " of " << got.w * got.h << " pixels differ by more than 16 levels";
+  std::filesystem::remove_all(dir);
+}
