@@ -97,3 +97,23 @@ TEST(Fragments, CriterionParsing) {
   EXPECT_THROW(BreakCriterion::parse("0.5"), std::invalid_argument);
   EXPECT_THROW(BreakCriterion::parse("x"), std::invalid_argument);
 }
+
+TEST(Crack, TipsAreTheEndsOfTheBrokenBondsAlongTheirLine) {
+  // A row of 6 particles above a row of 6 below (spacing 1); the vertical bonds 1..4 are broken: the crack
+  // runs from x = 1 to x = 4 at y = 0.5 (midpoints in the initial configuration).
+  std::vector<double> x0;
+  for (int row = 0; row < 2; ++row)
+    for (int i = 0; i < 6; ++i) x0.insert(x0.end(), {static_cast<double>(i), static_cast<double>(row)});
+  std::vector<std::array<int, 2>> bonds;
+  std::vector<std::uint8_t> broken;
+  for (int i = 0; i < 6; ++i) bonds.push_back({i, i + 6}), broken.push_back(i >= 1 && i <= 4);
+  const auto c = analysis::crack_extent(x0, 2, bonds, broken);
+  ASSERT_TRUE(c.present);
+  EXPECT_NEAR(c.tip_a.x(), 1.0, 1e-12);
+  EXPECT_NEAR(c.tip_b.x(), 4.0, 1e-12);
+  EXPECT_NEAR(c.tip_a.y(), 0.5, 1e-12);
+  EXPECT_NEAR(c.extent_cm, 3.0, 1e-12);
+  broken.assign(6, 0);
+  broken[2] = 1;
+  EXPECT_FALSE(analysis::crack_extent(x0, 2, bonds, broken).present) << "one broken bond is not yet a crack";
+}

@@ -188,7 +188,9 @@ FragmentReport analyse_fragments(const std::string& trajectory, const BreakCrite
     pe = rd.observable("potential_energy");
   } catch (const std::exception&) {
   }
-  FragmentTracker tracker(rd.particles(), rd.bonds(), mass, rd.dim(), rep.threshold_cm);
+  const auto bonds = rd.bonds();
+  FragmentTracker tracker(rd.particles(), bonds, mass, rd.dim(), rep.threshold_cm);
+  std::vector<double> x_initial;
   FrameLabels labels;
   TrajectoryFrame last;
   for (long k = 0; k < rd.frames(); ++k) {
@@ -206,6 +208,8 @@ FragmentReport analyse_fragments(const std::string& trajectory, const BreakCrite
     row.step = f.step;
     row.time = f.time;
     row.broken = tracker.broken_count();
+    if (k == 0) x_initial = f.position;
+    row.crack = crack_extent(x_initial, rd.dim(), bonds, tracker.broken());
     std::map<int, double> fm;
     for (std::size_t i = 0; i < mass.size(); ++i) fm[labels.fragment_id[i]] += mass[i];
     std::map<int, long> fn;
@@ -237,11 +241,18 @@ void write_fragment_report(const FragmentReport& r, const std::string& dir_name)
   const fs::path dir(dir_name);
   write_atomically(dir / "fragments_timeline.csv", [&](std::ostream& o) {
     o << "time_s,step,broken_bonds,fragments,fragments_2plus,fragments_1pct_mass,largest_mass_fraction,"
-         "mean_fragment_mass_g,kinetic_energy_erg,potential_energy_erg\n";
-    for (const auto& t : r.timeline)
+         "mean_fragment_mass_g,kinetic_energy_erg,potential_energy_erg,crack_tip_a_x_cm,crack_tip_a_y_cm,"
+         "crack_tip_a_z_cm,crack_tip_b_x_cm,crack_tip_b_y_cm,crack_tip_b_z_cm,crack_extent_cm\n";
+    for (const auto& t : r.timeline) {
       o << t.time << "," << t.step << "," << t.broken << "," << t.fragments << "," << t.fragments_2plus << ","
-        << t.fragments_1pct << "," << t.largest_fraction << "," << t.mean_mass << "," << t.kinetic << "," << t.potential
-        << "\n";
+        << t.fragments_1pct << "," << t.largest_fraction << "," << t.mean_mass << "," << t.kinetic << "," << t.potential;
+      if (t.crack.present)
+        o << "," << t.crack.tip_a.x() << "," << t.crack.tip_a.y() << "," << t.crack.tip_a.z() << "," << t.crack.tip_b.x()
+          << "," << t.crack.tip_b.y() << "," << t.crack.tip_b.z() << "," << t.crack.extent_cm;
+      else
+        o << ",,,,,,,0";  // no crack yet: no tips
+      o << "\n";
+    }
   });
   write_atomically(dir / "fragments_final.csv", [&](std::ostream& o) {
     o << "id,particles,mass_g,com_x_cm,com_y_cm,com_z_cm,v_x_cm_s,v_y_cm_s,v_z_cm_s,radius_of_gyration_cm,"

@@ -3,6 +3,8 @@
 // Streams frame by frame: memory is a few frames whatever the trajectory's length.
 #pragma once
 
+#include "pmfrag/analysis/crack.hpp"
+
 #include <Eigen/Core>
 
 #include <array>
@@ -33,6 +35,7 @@ struct TimelineRow {
   long fragments = 0, fragments_2plus = 0, fragments_1pct = 0;
   double largest_fraction = 0.0, mean_mass = 0.0;
   double kinetic = 0.0, potential = 0.0;
+  CrackExtent crack;  ///< tips and tip-to-tip extent of the broken bonds (crack.hpp)
 };
 
 struct Fragment {
