@@ -19,7 +19,7 @@ namespace pmfrag::app {
 namespace {
 
 struct RenderCli {
-  std::string dir, field = "fragment_id", panel, out;
+  std::string dir, field = "fragment_id", panel, out, cut;
   long every = 1;
   int size = 1024;
   bool no_frames = false;
@@ -50,13 +50,17 @@ std::vector<double> field_values(const std::string& field, const TrajectoryFrame
   return v;
 }
 
-render::FramePicture picture(const TrajectoryFrame& f, std::vector<double> values, int dim) {
+// The particles to draw: all, or (cut) those whose initial coordinate on the cut axis is at most the cut
+// value, so the same particles show in every frame of a sequence.
+render::FramePicture picture(const TrajectoryFrame& f, const std::vector<double>& values, int dim, int cut_axis,
+                             double cut_at, const TrajectoryFrame& first) {
   render::FramePicture p;
   const std::size_t n = values.size(), d = static_cast<std::size_t>(dim);
-  p.xyz.resize(3 * n);
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t c = 0; c < 3; ++c) p.xyz[3 * i + c] = c < d ? f.position[i * d + c] : 0.0;
-  p.value = std::move(values);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (cut_axis >= 0 && first.position[i * d + static_cast<std::size_t>(cut_axis)] > cut_at) continue;
+    for (std::size_t c = 0; c < 3; ++c) p.xyz.push_back(c < d ? f.position[i * d + c] : 0.0);
+    p.value.push_back(values[i]);
+  }
   p.time = f.time;
   return p;
 }
@@ -81,7 +85,17 @@ void run(const RenderCli& o) {
 
   H5mdReader rd((dir / "trajectory.h5").string());
   const int dim = rd.dim();
-  if (dim != 2) throw UsageError("render: 3-D views are not implemented yet (this run is 3-D)");
+  // --cut AXIS=VALUE keeps the particles on the near side of a plane (3-D: the interior shows on the cut).
+  int cut_axis = -1;
+  double cut_at = 0.0;
+  if (!o.cut.empty()) {
+    const auto eq = o.cut.find('=');
+    const std::string axis = o.cut.substr(0, eq);
+    if (eq == std::string::npos || (axis != "x" && axis != "y" && axis != "z") || (axis == "z" && dim == 2))
+      throw UsageError("--cut: expected x=VALUE, y=VALUE or (3-D) z=VALUE in cm (got '" + o.cut + "')");
+    cut_axis = axis[0] - 'x';
+    cut_at = parse_numbers("--cut", o.cut.substr(eq + 1), 1)[0];
+  }
   const auto species = rd.species();
   const double r0 = rd.parameter("r0");
   analysis::FragmentTracker tracker(rd.particles(), rd.bonds(), rd.mass(), dim, rd.parameter("cutoff"));
@@ -108,11 +122,20 @@ void run(const RenderCli& o) {
   render::View view;
   view.xmin = view.ymin = 1e300;
   view.xmax = view.ymax = -1e300;
-  for (std::size_t i = 0; i < species.size(); ++i) {
+  for (std::size_t i = 0; dim == 2 && i < species.size(); ++i) {
     view.xmin = std::min(view.xmin, first.position[2 * i]), view.xmax = std::max(view.xmax, first.position[2 * i]);
     view.ymin = std::min(view.ymin, first.position[2 * i + 1]), view.ymax = std::max(view.ymax, first.position[2 * i + 1]);
   }
   view.radius = 0.45 * r0;
+  if (dim == 3) {
+    view.three_d = true;
+    view.zmin = 1e300, view.zmax = -1e300;
+    for (std::size_t i = 0; i < species.size(); ++i) {
+      view.xmin = std::min(view.xmin, first.position[3 * i]), view.xmax = std::max(view.xmax, first.position[3 * i]);
+      view.ymin = std::min(view.ymin, first.position[3 * i + 1]), view.ymax = std::max(view.ymax, first.position[3 * i + 1]);
+      view.zmin = std::min(view.zmin, first.position[3 * i + 2]), view.zmax = std::max(view.zmax, first.position[3 * i + 2]);
+    }
+  }
 
   render::FieldSpec spec;
   spec.categorical = o.field == "fragment_id" || o.field == "phase";
@@ -174,7 +197,7 @@ void run(const RenderCli& o) {
     const bool want_frame = !o.no_frames && (k % o.every == 0 || k == frames - 1);
     const bool in_panel = std::find(panel_frames.begin(), panel_frames.end(), k) != panel_frames.end();
     if (!want_frame && !in_panel) continue;
-    auto pic = picture(f, field_values(o.field, f, first, lab, species, dim), dim);
+    auto pic = picture(f, field_values(o.field, f, first, lab, species, dim), dim, cut_axis, cut_at, first);
     if (want_frame) {
       char name[32];
       std::snprintf(name, sizeof name, "frame_%05ld.png", k);
@@ -213,6 +236,8 @@ void add_render_command(CLI::App& app) {
       ->type_name("F1,F2,...");
   cmd->add_option("--panel-out", o->out, "Where to write the panel (default RUN_DIR/panel.png)");
   cmd->add_flag("--no-frames", o->no_frames, "Only the panel, no frame sequence");
+  cmd->add_option("--cut", o->cut, "Show only particles with initial x, y or z at most VALUE cm, e.g. --cut z=1.5 "
+                                   "(3-D: look inside the block)");
   cmd->callback([o] { run(*o); });
 }
 

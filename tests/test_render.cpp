@@ -155,3 +155,34 @@ TEST(Render, MatchesTheCommittedReferenceImage) {
   EXPECT_LT(differ, got.w * got.h / 100) << differ << " of " << got.w * got.h << " pixels differ by more than 16 levels";
   std::filesystem::remove_all(dir);
 }
+
+TEST(Render, ThreeDimensionalViewShowsTheBoxInPerspective) {
+  const auto dir = test::temp_dir("render3d");
+  render::HeadlessWindow window(300, 300);
+  render::View view;
+  view.three_d = true;
+  view.xmin = view.ymin = view.zmin = 0.0;
+  view.xmax = view.ymax = 2.0;
+  view.zmax = 1.0;
+  view.radius = 0.1;
+  render::FieldSpec field;
+  field.title = "value";
+  render::FramePicture pic;
+  for (int i = 0; i <= 10; ++i)
+    for (int j = 0; j <= 10; ++j)
+      for (int k = 0; k <= 5; ++k) {
+        pic.xyz.insert(pic.xyz.end(), {0.2 * i, 0.2 * j, 0.2 * k});
+        pic.value.push_back(0.2 * k);  // colour by height: the top is yellow, the bottom dark
+      }
+  field.max = 1.0;
+  const std::string png = (dir / "cube.png").string();
+  render::render_png(window, view, field, {pic}, "", 300, 300, png);
+  const Image im = read_png(png);
+  ASSERT_EQ(im.h, 300);
+  // The box fills the middle of the panel and is not clipped: the panel's border rows and columns stay white.
+  EXPECT_FALSE(white(im.at(150, 150)));
+  int ink_border = 0;
+  for (int t = 0; t < 300; ++t) ink_border += !white(im.at(t, 1)) + !white(im.at(1, t)) + !white(im.at(298, t));
+  EXPECT_LT(ink_border, 60) << "the body touches the panel's edges";
+  std::filesystem::remove_all(dir);
+}

@@ -138,14 +138,31 @@ void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, co
     const double hw_ = 0.5 * (view.xmax - view.xmin), hh = 0.5 * (view.ymax - view.ymin);
     const double aspect = static_cast<double>(panel_w) / panel_h;
     vtkCamera* cam = ren->GetActiveCamera();
-    cam->ParallelProjectionOn();
+    if (view.three_d) {
+      // Perspective from the front-right, above: the whole box in view, the same camera for every frame.
+      const double cz = 0.5 * (view.zmin + view.zmax);
+      const double radius = 0.5 * std::sqrt(std::pow(view.xmax - view.xmin, 2) + std::pow(view.ymax - view.ymin, 2) +
+                                            std::pow(view.zmax - view.zmin, 2));
+      const double dir[3] = {0.55, -0.62, 0.56};  // unit length
+      // The view angle is vertical: a panel narrower than tall needs the camera further back.
+      const double dist = 1.15 * radius / std::sin(0.5 * 30.0 * 3.14159265358979 / 180.0) / std::min(1.0, aspect);
+      cam->ParallelProjectionOff();
+      cam->SetViewAngle(30.0);
+      cam->SetFocalPoint(cx, cy, cz);
+      cam->SetPosition(cx + dist * dir[0], cy + dist * dir[1], cz + dist * dir[2]);
+      cam->SetViewUp(0, 0, 1);
+      cam->SetClippingRange(0.1 * dist, 3.0 * dist);
+    }
+    if (!view.three_d) cam->ParallelProjectionOn();
     // A wider margin at the top leaves room for the time label above a stretched body.
     const double scale0 = 1.2 * std::max(hh, hw_ / aspect) + view.radius;
-    cam->SetFocalPoint(cx, cy + 0.04 * scale0, 0.0);
-    cam->SetPosition(cx, cy + 0.04 * scale0, 100.0);
-    cam->SetViewUp(0, 1, 0);
-    cam->SetParallelScale(scale0);
-    cam->SetClippingRange(1.0, 200.0);
+    if (!view.three_d) {
+      cam->SetFocalPoint(cx, cy + 0.04 * scale0, 0.0);
+      cam->SetPosition(cx, cy + 0.04 * scale0, 100.0);
+      cam->SetViewUp(0, 1, 0);
+      cam->SetParallelScale(scale0);
+      cam->SetClippingRange(1.0, 200.0);
+    }
 
     // Time label and caption.
     vtkNew<vtkTextActor> label;
@@ -156,12 +173,15 @@ void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, co
     label->GetPositionCoordinate()->SetValue(12, panel_h - std::max(14, panel_h / 36) - 14);
     ren->AddActor2D(label);
 
-    // Scale bar: 1 cm in world units at the lower left of the view.
+    // Scale bar: 1 cm in world units, at the lower left of a 2-D view; in 3-D along the box's front-bottom
+    // edge (so perspective scales it like the body).
     const double scale = cam->GetParallelScale();
-    const double x0 = cx - scale * aspect * 0.92, y0 = cy + 0.04 * scale - scale * 0.94;
+    const double x0 = view.three_d ? view.xmin : cx - scale * aspect * 0.92;
+    const double y0 = view.three_d ? view.ymin - 3 * view.radius : cy + 0.04 * scale - scale * 0.94;
+    const double z0 = view.three_d ? view.zmin : 1.0;
     vtkNew<vtkPoints> sp;
-    sp->InsertNextPoint(x0, y0, 1.0);
-    sp->InsertNextPoint(x0 + 1.0, y0, 1.0);
+    sp->InsertNextPoint(x0, y0, z0);
+    sp->InsertNextPoint(x0 + 1.0, y0, z0);
     vtkNew<vtkCellArray> line;
     const vtkIdType ids[2] = {0, 1};
     line->InsertNextCell(2, ids);
@@ -180,7 +200,7 @@ void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, co
     bar_text->GetTextProperty()->SetFontSize(std::max(12, panel_h / 45));
     bar_text->GetTextProperty()->SetColor(0.1, 0.1, 0.1);
     bar_text->GetPositionCoordinate()->SetCoordinateSystemToWorld();
-    bar_text->GetPositionCoordinate()->SetValue(x0, y0 + 0.12, 1.0);
+    bar_text->GetPositionCoordinate()->SetValue(x0, view.three_d ? y0 - 0.5 : y0 + 0.12, z0);
     ren->AddActor2D(bar_text);
 
     win->AddRenderer(ren);

@@ -20,6 +20,10 @@ struct FieldSpec {
 struct View {
   double xmin = 0, xmax = 1, ymin = 0, ymax = 1;
   double radius = 0.09;  ///< particle disc radius [cm]
+  /// 3-D: a perspective camera looking obliquely at the box [xmin..xmax] x [ymin..ymax] x [zmin..zmax]
+  /// (2-D: orthographic, looking down z).
+  bool three_d = false;
+  double zmin = 0, zmax = 0;
 };
 
 struct FramePicture {
