@@ -1,5 +1,6 @@
 // Scenes: the shipped cases read, build and run; errors name file, line and key.
 #include "pmfrag/run.hpp"
+#include "pmfrag/sweep.hpp"
 #include "pmfrag/system.hpp"
 #include "test_helpers.hpp"
 
@@ -83,6 +84,12 @@ TEST(Scene, EveryShippedCaseRunsAFewSteps) {
   int count = 0;
   for (const auto& entry : std::filesystem::directory_iterator(std::string(PMFRAG_SOURCE_DIR) + "/cases")) {
     if (entry.path().extension() != ".toml") continue;
+    if (entry.path().stem().string().rfind("sweep_", 0) == 0) {  // a sweep spec, not a scene: its cases must read
+      const SweepSpec spec = read_sweep_spec(entry.path().string());
+      const Scene base = read_scene(spec.base, spec.set);
+      for (const auto& k : sweep_cases(spec, base.phases.size())) (void)read_scene(spec.base, k.overrides);
+      continue;
+    }
     Scene sc = read_scene(entry.path().string());
     const System sys = build_system(sc);
     const double dt = choose_step(sc, sys).dt;
