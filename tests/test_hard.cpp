@@ -70,11 +70,11 @@ TEST(Hard, StiffLawAtNineTenthsOfTheLimitKeepsItsEnergyFor1e5Steps) {
   const StepChoice c = choose_step(sc, sys);
   EXPECT_NEAR(c.lattice_factor, 1.0 / std::sqrt(6.0), 0.01) << "triangular lattice: omega_max^2 = 6 k/m";
   auto lf = test::make_leapfrog<2>(sys, sc, 0.9 * c.limit);
-  const EnergyError err = energy_error(lf, test::scaled(100000), test::scaled(500));
+  const EnergyError err = energy_error(lf, test::scaled(100000), 50);
   std::printf("(7,14) free plate at 0.9 x limit (%.4g s), %ld steps: drift %.3g, excursion %.3g of KE0\n",
               0.9 * c.limit, test::scaled(100000), err.drift, err.excursion);
   // Random velocities put a share of KE0 into the highest modes, where 0.9 x the limit means omega dt = 1.8:
-  // measured drift 4.7e-3 and excursion 0.56 of KE0 (the pulled plate below, the paper's loading: 1e-8 of
+  // measured drift 5.3e-3 and excursion 0.55 of KE0 (the pulled plate below, the paper's loading: 1e-8 of
   // the work). At the paper's dt = 1e-7 s (0.3 x) Dynamics.FreePlate... holds the drift under 1e-4.
   EXPECT_LT(err.drift, 1e-2);
   EXPECT_LT(err.excursion, 1.0);
@@ -177,7 +177,7 @@ TEST_P(SoftLaws, RunAndKeepTheirEnergy) {
   System sys = free_body(sc, 100.0, 11);
   const StepChoice c = choose_step(sc, sys);
   auto lf = test::make_leapfrog<2>(sys, sc, 0.5 * c.limit);
-  const EnergyError err = energy_error(lf, test::scaled(20000), test::scaled(200));
+  const EnergyError err = energy_error(lf, test::scaled(20000), 10);
   std::printf("(%d,%d) at 0.5 x limit (%.4g s), %ld steps: drift %.3g, excursion %.3g of KE0\n", p, q, 0.5 * c.limit,
               test::scaled(20000), err.drift, err.excursion);
   EXPECT_LT(err.drift, 1e-3);
