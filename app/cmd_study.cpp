@@ -253,6 +253,63 @@ void study_accuracy(const StudyCli& o) {
   std::printf("wrote %s and %s\n", csv.c_str(), png.c_str());
 }
 
+// `pmfrag study sweep-figures SWEEP_DIR`: onset and separation time, and fragment counts, against the
+// modulus E of each (p,q), from sweep.csv (E orders the pairs from soft to stiff, as in Fig. 3).
+void sweep_figures(const std::string& dir, const std::string& prefix) {
+  const fs::path csv = fs::path(dir) / "sweep.csv";
+  std::ifstream in(csv);
+  if (!in) throw UsageError(csv.string() + ": not found (run `pmfrag sweep` first)");
+  std::string header;
+  std::getline(in, header);
+  std::vector<std::string> names;
+  {
+    std::stringstream hs(header);
+    for (std::string h; std::getline(hs, h, ',');) names.push_back(h);
+  }
+  auto column = [&](const std::string& name) {
+    const auto it = std::find(names.begin(), names.end(), name);
+    if (it == names.end()) throw std::runtime_error(csv.string() + ": no column '" + name + "'");
+    return static_cast<std::size_t>(it - names.begin());
+  };
+  const std::size_t cE = column("E_GPa"), cOn = column("onset_s"), cSep = column("separation_s"),
+                    cFr = column("fragments_2plus"), cSt = column("status");
+  struct Point {
+    double E, onset, sep, frags;
+  };
+  std::vector<Point> pts;
+  long skipped = 0;
+  for (std::string line; std::getline(in, line);) {
+    std::vector<std::string> cells;
+    std::stringstream ls(line);
+    for (std::string c; std::getline(ls, c, ',');) cells.push_back(c);
+    if (cells.size() <= cSt || cells[cSt].find("completed") == std::string::npos) {
+      ++skipped;
+      continue;
+    }
+    pts.push_back({std::stod(cells[cE]), std::stod(cells[cOn]), std::stod(cells[cSep]), std::stod(cells[cFr])});
+  }
+  std::sort(pts.begin(), pts.end(), [](const Point& a, const Point& b) { return a.E < b.E; });
+  render::Series onset{"first broken bond", {}, {}}, sep{"separation (2 pieces >= 5 % of the mass)", {}, {}},
+      frags{"fragments of >= 2 particles", {}, {}};
+  for (const auto& p : pts) {
+    if (p.onset > 0) onset.x.push_back(p.E), onset.y.push_back(p.onset * 1e3);
+    if (p.sep > 0) sep.x.push_back(p.E), sep.y.push_back(p.sep * 1e3);
+    frags.x.push_back(p.E), frags.y.push_back(p.frags);
+  }
+  render::HeadlessWindow window(1000, 650);
+  const std::string times_png = prefix + "_times.png", frags_png = prefix + "_fragments.png";
+  render::render_chart_png(window,
+                           {"Slit plate over (p,q): when it breaks (" + std::to_string(pts.size()) + " pairs)",
+                            "Young's modulus E [GPa] of the (p,q) material", "time [ms]", false, false, {onset, sep}},
+                           1000, 650, times_png);
+  render::render_chart_png(window,
+                           {"Slit plate over (p,q): fragments at the end", "Young's modulus E [GPa] of the (p,q) material",
+                            "fragments", false, false, {frags}},
+                           1000, 650, frags_png);
+  std::printf("wrote %s and %s from %zu completed cases (%ld not completed, left out)\n", times_png.c_str(),
+              frags_png.c_str(), pts.size(), skipped);
+}
+
 }  // namespace
 
 void add_study_command(CLI::App& app) {
@@ -271,6 +328,11 @@ void add_study_command(CLI::App& app) {
   acc->add_option("--png", o->png, "Where to write the chart (default OUT/accuracy.png)");
   acc->add_option("--threads", o->threads, "OpenMP threads per run (default: all cores)");
   acc->callback([o] { study_accuracy(*o); });
+  auto dir = std::make_shared<std::pair<std::string, std::string>>();
+  auto* fig = study->add_subcommand("sweep-figures", "Charts of a sweep: break times and fragment counts against E");
+  fig->add_option("sweep_dir", dir->first, "Folder holding sweep.csv")->required();
+  fig->add_option("--prefix", dir->second, "PNG path prefix (default SWEEP_DIR/sweep): PREFIX_times.png, PREFIX_fragments.png");
+  fig->callback([dir] { sweep_figures(dir->first, dir->second.empty() ? dir->first + "/sweep" : dir->second); });
 }
 
 }  // namespace pmfrag::app
