@@ -5,6 +5,7 @@
 #include "cmd_study.hpp"
 
 #include "parse.hpp"
+#include "run_files.hpp"
 #include "pmfrag/analysis/fragments.hpp"
 #include "pmfrag/h5md.hpp"
 #include "pmfrag/render/charts.hpp"
@@ -70,21 +71,6 @@ std::string num(double v) {
   return b;
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-double json_number(const std::string& text, const std::string& key) {
-  const auto at = text.find("\"" + key + "\":");
-  return at == std::string::npos ? NAN : std::strtod(text.c_str() + at + key.size() + 3, nullptr);
-}
-std::string json_text(const std::string& text, const std::string& key) {
-  const auto at = text.find("\"" + key + "\": \"");
-  if (at == std::string::npos) return "";
-  const auto from = at + key.size() + 5, to = text.find("\",\n", from);
-  return text.substr(from, to == std::string::npos ? std::string::npos : to - from);
-}
-
 // Positions at time t, from the frame nearest t moved along its velocity (frames of runs with different dt
 // do not fall on the same times).
 std::vector<double> positions_at(const H5mdReader& rd, double t) {
@@ -115,7 +101,7 @@ Row run_one(const StudyCli& o, const std::string& knob, double value, const std:
   for (const auto& s : sc.overrides) wanted += s + "\n";
   if (o.reuse && !before.empty() && recorded == wanted) {  // the same scene and overrides ran here before
     r.completed = before.find("\"completed\": true") != std::string::npos;
-    r.message = json_text(before, "message");
+    r.message = json_string(before, "message");
     r.steps = static_cast<long>(json_number(before, "steps"));
     r.particles = static_cast<std::size_t>(json_number(before, "particles"));
     r.wall_s = json_number(before, "wall_s");

@@ -5,6 +5,7 @@
 #include "cmd_sweep.hpp"
 
 #include "parse.hpp"
+#include "run_files.hpp"
 #include "pmfrag/material.hpp"
 #include "pmfrag/scene.hpp"
 #include "pmfrag/sweep.hpp"
@@ -39,29 +40,6 @@ struct SweepCli {
   std::vector<std::string> pairs, set;
   int jobs = 0;
 };
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
-// A number or string from our own flat JSON files (run.json, summary.json).
-double json_number(const std::string& text, const std::string& key) {
-  const auto at = text.find("\"" + key + "\":");
-  if (at == std::string::npos) return NAN;
-  return std::strtod(text.c_str() + at + key.size() + 3, nullptr);
-}
-std::string json_string(const std::string& text, const std::string& key) {
-  const auto at = text.find("\"" + key + "\": \"");
-  if (at == std::string::npos) return "";
-  const auto from = at + key.size() + 5;
-  std::string out;
-  for (std::size_t k = from; k < text.size() && text[k] != '"'; ++k) {
-    if (text[k] == '\\' && k + 1 < text.size()) ++k;
-    out += text[k];
-  }
-  return out;
-}
 
 bool finished(const fs::path& dir) {
   return fs::exists(dir / "summary.json") && slurp(dir / "run.json").find("\"completed\": true") != std::string::npos;

@@ -50,6 +50,19 @@ EnergyError energy_error(Leapfrog<2>& lf, long steps, long every) {
   return {std::fabs(slope * static_cast<double>(steps)) / o0.kinetic, worst / o0.kinetic};
 }
 
+// A --set item "key=value" with the value at full precision.
+std::string set_number(const std::string& key, double value) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", value);
+  return key + "=" + b;
+}
+
+// The stability limit of the paper's (7,14) plate [s].
+double plate_714_limit() {
+  const Scene probe = read_scene(test::case_path("slit_plate_7_14.toml"));
+  return choose_step(probe, build_system(probe)).limit;
+}
+
 double min_distance(const std::vector<double>& x, int dim) {
   const std::size_t n = x.size() / static_cast<std::size_t>(dim);
   double best = INFINITY;
@@ -85,13 +98,8 @@ TEST(Hard, StiffPulledPlateAtNineTenthsOfTheLimitBalancesEnergyUntilItBreaks) {
   // boundary work holds far better than on the free plate. After the first bond breaks, pairs pressed below
   // r0 are stiffer than the limit assumes and a fixed step of 0.9 x the limit is stopped by the guard
   // (docs/stability.md); here the run ends just before.
-  Scene probe = read_scene(test::case_path("slit_plate_7_14.toml"));
-  const double limit = choose_step(probe, build_system(probe)).limit;
-  char dt[64];
-  std::snprintf(dt, sizeof dt, "time.dt=%.17g", 0.9 * limit);
-  char end[64];
-  std::snprintf(end, sizeof end, "time.end=%.6g", 1.04e-2 * test::test_scale());
-  Scene sc = read_scene(test::case_path("slit_plate_7_14.toml"), {dt, end});
+  Scene sc = read_scene(test::case_path("slit_plate_7_14.toml"),
+                        {set_number("time.dt", 0.9 * plate_714_limit()), set_number("time.end", 1.04e-2 * test::test_scale())});
   RunOptions ro;
   ro.out_dir = test::temp_dir("pulled09").string();
   const RunResult r = run_scene(sc, ro);
@@ -106,11 +114,8 @@ TEST(Hard, StiffPulledPlateAtNineTenthsOfTheLimitBalancesEnergyUntilItBreaks) {
 }
 
 TEST(Hard, AboveTheLimitIsRefusedAndForcedThroughTheGuardStopsIt) {
-  Scene probe = read_scene(test::case_path("slit_plate_7_14.toml"));
-  const double limit = choose_step(probe, build_system(probe)).limit;
-  char dt[64];
-  std::snprintf(dt, sizeof dt, "time.dt=%.17g", 1.1 * limit);
-  Scene sc = read_scene(test::case_path("slit_plate_7_14.toml"), {dt, "time.end=1e-3", "output.every=1e-6"});
+  Scene sc = read_scene(test::case_path("slit_plate_7_14.toml"),
+                        {set_number("time.dt", 1.1 * plate_714_limit()), "time.end=1e-3", "output.every=1e-6"});
   RunOptions ro;
   ro.out_dir = test::temp_dir("above").string();
   EXPECT_THROW((void)run_scene(sc, ro), UnstableStepError);
@@ -132,8 +137,7 @@ TEST_P(Impact, AdaptiveStepsKeepEnergyAndDistance) {
   std::snprintf(vel, sizeof vel, "impactor.0.velocity=[0.0, %.1f]", -speed);
   // The paper's clamp r_min = 0.1 r0: a fixed step would have to be 1e-9 s (Eq. 15 at r_min). The disc
   // starts 0.04 cm clear of contact, so even the shortened (sanitizer) run sees the impact.
-  char end[64];
-  std::snprintf(end, sizeof end, "time.end=%.6g", std::max(3e-3, 6e-3 * test::test_scale()));
+  const std::string end = set_number("time.end", std::max(3e-3, 6e-3 * test::test_scale()));
   Scene sc = read_scene(test::case_path("impact.toml"), {vel, "time.dt=\"adaptive\"", "pair.r_min=0.1", end,
                                                         "output.every=2e-5", "body.1.shape.center=[0.0, 1.0]"});
   const System sys = build_system(sc);
