@@ -17,7 +17,9 @@
 
 using namespace pmfrag;
 
-TEST(Export, RoundTripThroughVtkReaderAndPvd) {
+class Export : public ::testing::TestWithParam<analysis::Compression> {};
+
+TEST_P(Export, RoundTripThroughVtkReaderAndPvd) {
   const auto dir = test::temp_dir("export");
   // A small notched (3,5) plate torn apart at 1000 cm/s: it breaks at 1.7e-4 s and splits by 2.3e-4 s, so
   // fragments, damage and broken bonds are all non-trivial in a short run.
@@ -48,6 +50,7 @@ every = 1e-5
   ASSERT_TRUE(run_scene(sc, ro).completed);
   analysis::ExportOptions opt;
   opt.every = 2;
+  opt.compression = GetParam();
   const auto res = analysis::export_vtk(dir.string(), opt);
   H5mdReader rd((dir / "trajectory.h5").string());
   const long frames = rd.frames();
@@ -113,3 +116,14 @@ every = 1e-5
   EXPECT_GE(max_fragments, 2) << "the plate should have split by 3e-4 s";
   std::filesystem::remove_all(dir);
 }
+
+INSTANTIATE_TEST_SUITE_P(Compressors, Export,
+                         ::testing::Values(analysis::Compression::lz4, analysis::Compression::zlib,
+                                           analysis::Compression::none),
+                         [](const auto& tp) {
+                           switch (tp.param) {
+                             case analysis::Compression::lz4: return std::string("lz4");
+                             case analysis::Compression::zlib: return std::string("zlib");
+                             default: return std::string("none");
+                           }
+                         });

@@ -55,7 +55,8 @@ struct Static {
 };
 
 void write_frame(const fs::path& file, const Static& st, const TrajectoryFrame& f, const TrajectoryFrame& first,
-                 const FrameLabels& lab, const std::vector<std::uint8_t>& broken, const std::set<std::string>& fields) {
+                 const FrameLabels& lab, const std::vector<std::uint8_t>& broken, const std::set<std::string>& fields,
+                 Compression compression) {
   auto want = [&](const char* name) { return fields.empty() || fields.count(name); };
   const vtkIdType n = static_cast<vtkIdType>(st.n), m = static_cast<vtkIdType>(st.bonds.size());
   const std::size_t d = static_cast<std::size_t>(st.dim);
@@ -156,8 +157,14 @@ void write_frame(const fs::path& file, const Static& st, const TrajectoryFrame& 
   w->SetInputData(grid);
   w->SetDataModeToAppended();
   w->EncodeAppendedDataOff();
-  w->SetCompressorTypeToZLib();
-  w->SetCompressionLevel(1);  // fast: the zlib level dominates export time; level 1 is within ~10 % of the size
+  switch (compression) {
+    case Compression::lz4: w->SetCompressorTypeToLZ4(); break;
+    case Compression::zlib:
+      w->SetCompressorTypeToZLib();
+      w->SetCompressionLevel(1);  // the zlib level dominates export time; level 1 is within ~10 % of level 6's size
+      break;
+    case Compression::none: w->SetCompressorTypeToNone(); break;
+  }
   if (w->Write() != 1 || w->GetErrorCode() != 0) throw std::runtime_error(file.string() + ": VTK writer failed");
   fs::rename(tmp, file);
 }
@@ -223,7 +230,7 @@ ExportResult export_vtk(const std::string& run_dir, const ExportOptions& opt) {
     if (k % opt.every != 0 && k != frames - 1) continue;
     char name[32];
     std::snprintf(name, sizeof name, "frame_%05ld.vtu", k);
-    write_frame(dir / "vtk" / name, st, f, first, lab, tracker.broken(), opt.fields);
+    write_frame(dir / "vtk" / name, st, f, first, lab, tracker.broken(), opt.fields, opt.compression);
     written.emplace_back(f.time, std::string("vtk/") + name);
     ++res.frames_written;
   }
