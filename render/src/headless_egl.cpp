@@ -2,7 +2,6 @@
 
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
-#include <dlfcn.h>
 #include <vtkCallbackCommand.h>
 #include <vtkCommand.h>
 #include <vtkGenericOpenGLRenderWindow.h>
@@ -10,17 +9,7 @@
 
 #include <string>
 
-// Debian's GLEW is built for GLX only: glewInit() loads every entry point and then reports
-// GLEW_ERROR_NO_GLX_DISPLAY (4), which VTK treats as fatal. With an EGL context current the entry points are
-// fine, so this interposed glewInit reports success for that one code. Must stay in an object file that is
-// linked in, with default visibility.
-extern "C" __attribute__((visibility("default"))) unsigned int glewInit() {
-  using Fn = unsigned int (*)();
-  static Fn real = reinterpret_cast<Fn>(dlsym(RTLD_NEXT, "glewInit"));
-  if (!real) return 1;
-  const unsigned int r = real();
-  return r == 4 ? 0 : r;
-}
+#include "glew_shim.hpp"
 
 namespace pmfrag::render {
 
