@@ -1,5 +1,6 @@
 #include "cmd_render.hpp"
 
+#include "movie.hpp"
 #include "parse.hpp"
 #include "pmfrag/analysis/fragments.hpp"
 #include "pmfrag/h5md.hpp"
@@ -22,7 +23,8 @@ struct RenderCli {
   std::string dir, field = "fragment_id", panel, out, cut;
   long every = 1;
   int size = 1024;
-  bool no_frames = false;
+  double fps = 12.0;
+  bool no_frames = false, movie = false;
 };
 
 // One value per particle for the chosen field.
@@ -70,6 +72,7 @@ void run(const RenderCli& o) {
   if (std::find(fields.begin(), fields.end(), o.field) == fields.end())
     throw UsageError("--field: expected fragment_id, displacement, damage, speed or phase (got '" + o.field + "')");
   if (o.size < 64 || o.size > 8192) throw UsageError("--size: must be in 64..8192");
+  if (o.movie && o.no_frames) throw UsageError("--movie is made of the frames: it cannot go with --no-frames");
   namespace fs = std::filesystem;
   const fs::path dir(o.dir);
   if (!fs::exists(dir / "trajectory.h5")) throw UsageError(o.dir + ": no trajectory.h5 (run `pmfrag run` first)");
@@ -174,6 +177,11 @@ void run(const RenderCli& o) {
   const fs::path frames_dir = dir / "frames";
   if (!o.no_frames) {
     fs::create_directories(frames_dir);
+    // frames/ holds one sequence: an earlier render's frames (another --every) would mix into the movie.
+    for (const auto& e : fs::directory_iterator(frames_dir)) {
+      const std::string name = e.path().filename().string();
+      if (name.rfind("frame_", 0) == 0 && e.path().extension() == ".png") fs::remove(e.path());
+    }
     const fs::path note = frames_dir / "PARTIAL.txt";
     if (damage.empty())
       fs::remove(note);
@@ -210,6 +218,11 @@ void run(const RenderCli& o) {
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!o.no_frames)
     std::printf("rendered %ld frames to %s (%.1f frames/s incl. PNG)\n", rendered, frames_dir.c_str(), rendered / secs);
+  if (o.movie) {
+    encode_movie(frames_dir, dir, o.fps);
+    std::printf("wrote the movie %s and %s (%g frames/s)\n", (dir / "crack.mp4").c_str(), (dir / "crack.gif").c_str(),
+                o.fps);
+  }
   if (!panel.empty()) {
     const char* letters = "abcdefghijklmnopqrstuvwxyz";
     for (std::size_t j = 0; j < panel.size(); ++j) panel[j].caption = std::string("(") + letters[j % 26] + ")";
@@ -236,6 +249,8 @@ void add_render_command(CLI::App& app) {
       ->type_name("F1,F2,...");
   cmd->add_option("--panel-out", o->out, "Where to write the panel (default RUN_DIR/panel.png)");
   cmd->add_flag("--no-frames", o->no_frames, "Only the panel, no frame sequence");
+  cmd->add_flag("--movie", o->movie, "Also encode the frames as RUN_DIR/crack.mp4 and crack.gif (needs ffmpeg)");
+  cmd->add_option("--fps", o->fps, "Movie frame rate (default 12)")->check(CLI::Range(0.1, 120.0));
   cmd->add_option("--cut", o->cut, "Show only particles with initial x, y or z at most VALUE cm, e.g. --cut z=1.5 "
                                    "(3-D: look inside the block)");
   cmd->callback([o] { run(*o); });

@@ -5,14 +5,13 @@
 #include "cmd_sweep.hpp"
 
 #include "parse.hpp"
+#include "process.hpp"
 #include "run_files.hpp"
 #include "pmfrag/material.hpp"
 #include "pmfrag/scene.hpp"
 #include "pmfrag/sweep.hpp"
 #include "pmfrag/system.hpp"
 
-#include <fcntl.h>
-#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -26,8 +25,6 @@
 #include <memory>
 #include <set>
 #include <thread>
-
-extern char** environ;
 
 namespace pmfrag::app {
 
@@ -43,21 +40,6 @@ struct SweepCli {
 
 bool finished(const fs::path& dir) {
   return fs::exists(dir / "summary.json") && slurp(dir / "run.json").find("\"completed\": true") != std::string::npos;
-}
-
-pid_t spawn(const std::vector<std::string>& args, const fs::path& log) {
-  std::vector<char*> argv;
-  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-  posix_spawn_file_actions_adddup2(&fa, 1, 2);
-  pid_t pid = -1;
-  const int rc = posix_spawn(&pid, "/proc/self/exe", &fa, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  if (rc != 0) throw std::runtime_error("cannot start a worker process for " + log.parent_path().string());
-  return pid;
 }
 
 void sweep(const SweepCli& o) {
@@ -103,7 +85,7 @@ void sweep(const SweepCli& o) {
     } else {
       args.insert(args.end(), {"fragments", dir.string()});
     }
-    running[spawn(args, dir / "log.txt")] = {c, stage};
+    running[start_process("/proc/self/exe", args, dir / "log.txt")] = {c, stage};
   };
   while (next < todo.size() || !running.empty()) {
     while (static_cast<int>(running.size()) < jobs && next < todo.size()) start(todo[next++], 1);

@@ -1,0 +1,56 @@
+#include "movie.hpp"
+
+#include "process.hpp"
+
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <stdexcept>
+#include <vector>
+
+namespace pmfrag::app {
+
+namespace fs = std::filesystem;
+
+void encode_movie(const fs::path& frames_dir, const fs::path& out_dir, double fps) {
+  const std::string ffmpeg = find_on_path("ffmpeg");
+  if (ffmpeg.empty())
+    throw std::runtime_error("--movie needs ffmpeg, which is not on PATH (bash scripts/install-deps installs it)");
+  const fs::path log = out_dir / "movie.log";
+  fs::remove(log);
+  char rate[32];
+  std::snprintf(rate, sizeof rate, "%g", fps);
+  const std::vector<std::string> input{"-y", "-loglevel", "error", "-framerate", rate, "-pattern_type", "glob",
+                                       "-i", (frames_dir / "frame_*.png").string()};
+  struct Output {
+    std::string name;
+    std::vector<std::string> args;
+  };
+  const std::vector<Output> outputs{
+      // H.264 needs even sizes; yuv420p is what every player decodes.
+      {"crack.mp4",
+       {"-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2:color=white", "-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf",
+        "23", "-movflags", "+faststart", "-f", "mp4"}},
+      // One palette for the whole clip keeps the GIF small and its colours steady.
+      {"crack.gif",
+       {"-vf", "scale='min(360,iw)':-2:flags=lanczos,split[a][b];[a]palettegen=max_colors=32[p];[b][p]paletteuse=dither=none",
+        "-f", "gif"}},
+  };
+  for (const auto& out : outputs) {
+    const fs::path file = out_dir / out.name, tmp = out_dir / (out.name + ".tmp");
+    std::vector<std::string> args{"ffmpeg"};
+    args.insert(args.end(), input.begin(), input.end());
+    args.insert(args.end(), out.args.begin(), out.args.end());
+    args.push_back(tmp.string());
+    const pid_t pid = start_process(ffmpeg, args, log);
+    int status = 0;
+    if (::waitpid(pid, &status, 0) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+      fs::remove(tmp);
+      throw std::runtime_error("ffmpeg failed to write " + file.string() + " (see " + log.string() + ")");
+    }
+    fs::rename(tmp, file);
+  }
+  fs::remove(log);
+}
+
+}  // namespace pmfrag::app
