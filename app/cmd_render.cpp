@@ -7,6 +7,8 @@
 #include "pmfrag/render/frames.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cstdint>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -23,7 +25,8 @@ struct RenderCli {
   std::string dir, field = "fragment_id", panel, out, cut;
   long every = 1;
   int size = 1024;
-  double fps = 12.0;
+  double fps = 12.0, vectors = 0.0;
+  bool bonds = false;
   bool no_frames = false, movie = false;
 };
 
@@ -52,16 +55,51 @@ std::vector<double> field_values(const std::string& field, const TrajectoryFrame
   return v;
 }
 
+// What to draw over the particles (--bonds, --vectors).
+struct Overlay {
+  const std::vector<std::array<int, 2>>* bonds = nullptr;  ///< with their broken flags: --bonds
+  const std::vector<std::uint8_t>* broken = nullptr;
+  double r0 = 0.2;             ///< cm
+  double vector_scale = 0.0;   ///< > 0: displacement vectors, this many times their length
+};
+
 // The particles to draw: all, or (cut) those whose initial coordinate on the cut axis is at most the cut
-// value, so the same particles show in every frame of a sequence.
+// value, so the same particles show in every frame of a sequence. Overlays join drawn particles only.
 render::FramePicture picture(const TrajectoryFrame& f, const std::vector<double>& values, int dim, int cut_axis,
-                             double cut_at, const TrajectoryFrame& first) {
+                             double cut_at, const TrajectoryFrame& first, const Overlay& overlay) {
   render::FramePicture p;
   const std::size_t n = values.size(), d = static_cast<std::size_t>(dim);
+  std::vector<std::uint8_t> drawn(n, 0);
+  auto at = [&](const std::vector<double>& x, std::size_t i, std::size_t c) { return c < d ? x[i * d + c] : 0.0; };
   for (std::size_t i = 0; i < n; ++i) {
     if (cut_axis >= 0 && first.position[i * d + static_cast<std::size_t>(cut_axis)] > cut_at) continue;
-    for (std::size_t c = 0; c < 3; ++c) p.xyz.push_back(c < d ? f.position[i * d + c] : 0.0);
+    drawn[i] = 1;
+    for (std::size_t c = 0; c < 3; ++c) p.xyz.push_back(at(f.position, i, c));
     p.value.push_back(values[i]);
+  }
+  if (overlay.bonds) {
+    // Intact bonds in grey; a broken bond in red while its ends are within 3 r0 (the faces of a crack that has
+    // just opened), not across the gap between fragments that have flown apart.
+    for (std::size_t b = 0; b < overlay.bonds->size(); ++b) {
+      const auto i = static_cast<std::size_t>((*overlay.bonds)[b][0]), j = static_cast<std::size_t>((*overlay.bonds)[b][1]);
+      if (!drawn[i] || !drawn[j]) continue;
+      double r2 = 0;
+      for (std::size_t c = 0; c < d; ++c) r2 += std::pow(f.position[i * d + c] - f.position[j * d + c], 2);
+      const bool broken = (*overlay.broken)[b] != 0;
+      if (broken && r2 > 9.0 * overlay.r0 * overlay.r0) continue;
+      for (std::size_t c = 0; c < 3; ++c) p.segments.push_back(at(f.position, i, c));
+      for (std::size_t c = 0; c < 3; ++c) p.segments.push_back(at(f.position, j, c));
+      p.segment_kinds.push_back(broken ? render::SegmentKind::broken_bond : render::SegmentKind::intact_bond);
+    }
+  }
+  if (overlay.vector_scale > 0) {
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!drawn[i]) continue;
+      for (std::size_t c = 0; c < 3; ++c) p.segments.push_back(at(f.position, i, c));
+      for (std::size_t c = 0; c < 3; ++c)
+        p.segments.push_back(at(f.position, i, c) + overlay.vector_scale * (at(f.position, i, c) - at(first.position, i, c)));
+      p.segment_kinds.push_back(render::SegmentKind::vector);
+    }
   }
   p.time = f.time;
   return p;
@@ -72,6 +110,7 @@ void run(const RenderCli& o) {
   if (std::find(fields.begin(), fields.end(), o.field) == fields.end())
     throw UsageError("--field: expected fragment_id, displacement, damage, speed or phase (got '" + o.field + "')");
   if (o.size < 64 || o.size > 8192) throw UsageError("--size: must be in 64..8192");
+  if (o.vectors < 0) throw UsageError("--vectors: the scale must be positive");
   if (o.movie && o.no_frames) throw UsageError("--movie is made of the frames: it cannot go with --no-frames");
   namespace fs = std::filesystem;
   const fs::path dir(o.dir);
@@ -197,24 +236,31 @@ void run(const RenderCli& o) {
     panel_frames.push_back(best);
   }
   std::vector<render::FramePicture> panel(panel_frames.size());
+  const auto bond_list = rd.bonds();
+  Overlay overlay;
+  if (o.bonds) overlay.bonds = &bond_list, overlay.broken = &tracker.broken();
+  overlay.r0 = r0;
+  overlay.vector_scale = o.vectors;
   const auto t0 = std::chrono::steady_clock::now();
   long rendered = 0;
+  render::PngQueue png_queue;  // frames are encoded while the next one renders
   for (long k = 0; k < frames; ++k) {
     const auto f = rd.frame(k);
     const auto lab = tracker.update(f.position);  // every frame: breakage is history-dependent
     const bool want_frame = !o.no_frames && (k % o.every == 0 || k == frames - 1);
     const bool in_panel = std::find(panel_frames.begin(), panel_frames.end(), k) != panel_frames.end();
     if (!want_frame && !in_panel) continue;
-    auto pic = picture(f, field_values(o.field, f, first, lab, species, dim), dim, cut_axis, cut_at, first);
+    auto pic = picture(f, field_values(o.field, f, first, lab, species, dim), dim, cut_axis, cut_at, first, overlay);
     if (want_frame) {
       char name[32];
       std::snprintf(name, sizeof name, "frame_%05ld.png", k);
-      render::render_png(window, view, spec, {pic}, "", o.size, o.size, (frames_dir / name).string(), 1);
+      render::render_png(window, view, spec, {pic}, "", o.size, o.size, (frames_dir / name).string(), 1, &png_queue);
       ++rendered;
     }
     for (std::size_t j = 0; j < panel_frames.size(); ++j)
       if (panel_frames[j] == k) panel[j] = pic;
   }
+  png_queue.finish();
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!o.no_frames)
     std::printf("rendered %ld frames to %s (%.1f frames/s incl. PNG)\n", rendered, frames_dir.c_str(), rendered / secs);
@@ -249,6 +295,9 @@ void add_render_command(CLI::App& app) {
       ->type_name("F1,F2,...");
   cmd->add_option("--panel-out", o->out, "Where to write the panel (default RUN_DIR/panel.png)");
   cmd->add_flag("--no-frames", o->no_frames, "Only the panel, no frame sequence");
+  cmd->add_flag("--bonds", o->bonds, "Draw bonds: intact grey, just-broken red (ends within 3 r0)");
+  cmd->add_option("--vectors", o->vectors, "Draw displacement vectors, this many times their length (e.g. 5)")
+      ->type_name("SCALE");
   cmd->add_flag("--movie", o->movie, "Also encode the frames as RUN_DIR/crack.mp4 and crack.gif (needs ffmpeg)");
   cmd->add_option("--fps", o->fps, "Movie frame rate (default 12)")->check(CLI::Range(0.1, 120.0));
   cmd->add_option("--cut", o->cut, "Show only particles with initial x, y or z at most VALUE cm, e.g. --cut z=1.5 "

@@ -14,6 +14,8 @@ for pq in 3_5 5_10 7_14; do
 done
 "$pmfrag" render "$work/slit_plate_7_14" --no-frames --field displacement --panel 0,0.7,0.8,1 --size 800 \
   --panel-out gallery/slit_plate_7_14_displacement.png
+"$pmfrag" render "$work/slit_plate_7_14" --no-frames --bonds --field damage --panel 0.71,0.73,0.75,0.8 --size 800 \
+  --panel-out gallery/slit_plate_7_14_bonds.png
 "$pmfrag" run cases/impact.toml --out "$work/impact" --force -q > /dev/null
 "$pmfrag" render "$work/impact" --no-frames --field speed --panel 0,0.3,0.5,1 --size 800 --panel-out gallery/impact_speed.png
 "$pmfrag" run cases/inclusion.toml --out "$work/inclusion" --force -q > /dev/null

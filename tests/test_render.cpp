@@ -89,6 +89,46 @@ TEST(Render, ParticlesAppearWhereProjectedInTheirColours) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(Render, BondsAndVectorsDrawOverTheParticlesInTheirColours) {
+  const auto dir = test::temp_dir("overlay");
+  render::HeadlessWindow window(300, 300);
+  render::View view;
+  view.xmin = view.ymin = -1.0;
+  view.xmax = view.ymax = 1.0;
+  view.radius = 0.08;
+  render::FieldSpec field;
+  field.categorical = true;
+  render::FramePicture pic;
+  pic.xyz = {-0.5, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0, -0.5, 0.0};
+  pic.value = {0, 0, 0};
+  const std::string plain = (dir / "plain.png").string(), lines = (dir / "lines.png").string();
+  render::render_png(window, view, field, {pic}, "", 300, 300, plain);
+  // An intact bond between particles 0 and 1 (along y = 0), a broken one from 1 to 2, and particle 2's
+  // displacement vector straight down.
+  pic.segments = {-0.5, 0.0, 0.0, 0.5, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0, -0.5, 0.0, 0.0, -0.5, 0.0, 0.0, -0.9, 0.0};
+  pic.segment_kinds = {render::SegmentKind::intact_bond, render::SegmentKind::broken_bond, render::SegmentKind::vector};
+  render::render_png(window, view, field, {pic}, "", 300, 300, lines);
+  const Image a = read_png(plain), b = read_png(lines);
+  const double scale = 1.2 + 0.08;
+  auto px = [&](double x) { return static_cast<int>(std::lround(150 + x / scale * 150)); };
+  auto py = [&](double y) { return static_cast<int>(std::lround(150 + (y - 0.04 * scale) / scale * 150)); };
+  // Search a few pixels across each line's expected position for its colour (lines are one pixel wide).
+  auto near = [&](const Image& im, int x, int y, std::array<int, 3> want) {
+    for (int dx = -2; dx <= 2; ++dx)
+      for (int dy = -2; dy <= 2; ++dy) {
+        const auto c = im.at(x + dx, y + dy);
+        if (std::abs(c[0] - want[0]) < 40 && std::abs(c[1] - want[1]) < 40 && std::abs(c[2] - want[2]) < 40) return true;
+      }
+    return false;
+  };
+  EXPECT_TRUE(white(a.at(px(0.0), py(0.0))));  // no overlay: background between the particles
+  EXPECT_TRUE(near(b, px(0.0), py(0.0), {90, 90, 90})) << "intact bond, grey";
+  EXPECT_TRUE(near(b, px(0.25), py(-0.25), {213, 30, 30})) << "broken bond, red";
+  EXPECT_TRUE(near(b, px(0.0), py(-0.75), {0, 0, 0})) << "vector, black";
+  EXPECT_FALSE(near(a, px(0.0), py(-0.75), {0, 0, 0}));
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Render, ChartDrawsEachCurveInItsColour) {
   const auto dir = test::temp_dir("chart");
   render::HeadlessWindow window(400, 300);

@@ -5,6 +5,8 @@
 #include <vtkActor.h>
 #include <vtkActor2D.h>
 #include <vtkCellArray.h>
+#include <vtkCellData.h>
+#include <vtkUnsignedCharArray.h>
 #include <vtkDoubleArray.h>
 #include <vtkGenericOpenGLRenderWindow.h>
 #include <vtkLookupTable.h>
@@ -79,10 +81,52 @@ std::string time_text(double t) {
   return b;
 }
 
+// Bonds and vectors as one set of coloured lines. In 2-D they are lifted towards the camera so that they draw
+// over the discs (which lie at z = 0) instead of fighting them for depth.
+vtkSmartPointer<vtkActor> segment_actor(const FramePicture& pic, const View& view) {
+  const std::size_t m = pic.segment_kinds.size();
+  if (pic.segments.size() != 6 * m) throw std::invalid_argument("render: 6 coordinates per segment expected");
+  const double lift = view.three_d ? 0.0 : 1.0;
+  vtkNew<vtkPoints> pts;
+  pts->SetDataTypeToDouble();
+  pts->SetNumberOfPoints(static_cast<vtkIdType>(2 * m));
+  vtkNew<vtkCellArray> lines;
+  vtkNew<vtkUnsignedCharArray> rgb;
+  rgb->SetNumberOfComponents(3);
+  rgb->SetNumberOfTuples(static_cast<vtkIdType>(m));
+  for (std::size_t k = 0; k < m; ++k) {
+    const double* e = &pic.segments[6 * k];
+    const auto a = static_cast<vtkIdType>(2 * k);
+    pts->SetPoint(a, e[0], e[1], e[2] + lift);
+    pts->SetPoint(a + 1, e[3], e[4], e[5] + lift);
+    const vtkIdType ids[2] = {a, a + 1};
+    lines->InsertNextCell(2, ids);
+    const unsigned char grey[3] = {90, 90, 90}, red[3] = {213, 30, 30}, black[3] = {0, 0, 0};
+    const unsigned char* c = pic.segment_kinds[k] == SegmentKind::intact_bond   ? grey
+                             : pic.segment_kinds[k] == SegmentKind::broken_bond ? red
+                                                                                : black;
+    rgb->SetTypedTuple(static_cast<vtkIdType>(k), c);
+  }
+  vtkNew<vtkPolyData> poly;
+  poly->SetPoints(pts);
+  poly->SetLines(lines);
+  poly->GetCellData()->SetScalars(rgb);
+  vtkNew<vtkPolyDataMapper> mapper;
+  mapper->SetInputData(poly);
+  mapper->SetColorModeToDirectScalars();
+  mapper->SetScalarModeToUseCellData();
+  auto actor = vtkSmartPointer<vtkActor>::New();
+  actor->SetMapper(mapper);
+  actor->GetProperty()->SetLineWidth(1.0f);
+  actor->GetProperty()->LightingOff();
+  return actor;
+}
+
 }  // namespace
 
 void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, const std::vector<FramePicture>& pics,
-                const std::string& title, int panel_w, int panel_h, const std::string& png_path, int compression) {
+                const std::string& title, int panel_w, int panel_h, const std::string& png_path, int compression,
+                PngQueue* queue) {
   vtkGenericOpenGLRenderWindow* win = hw.window();
   const int count = static_cast<int>(pics.size());
   const int title_h = title.empty() ? 0 : std::max(40, panel_h / 14);
@@ -119,6 +163,7 @@ void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, co
     mapper->SetInputData(poly);
     mapper->SetScaleFactor(view.radius);
     mapper->SetSplatShaderCode(disc_shader);
+    mapper->SetTriangleScale(1.0f);  // the disc has radius 1: the default 3 sends 9x the fragments, all discarded
     mapper->SetLookupTable(lut);
     mapper->SetScalarRange(lut->GetTableRange());
     mapper->ScalarVisibilityOn();
@@ -132,6 +177,7 @@ void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, co
     ren->SetViewport(panels_right * k / count, 0.0, panels_right * (k + 1) / count, top);
     ren->SetBackground(1.0, 1.0, 1.0);
     ren->AddActor(actor);
+    if (!pic.segments.empty()) ren->AddActor(segment_actor(pic, view));
 
     // Camera fixed to the initial body (with a margin), the same for every frame of a sequence.
     const double cx = 0.5 * (view.xmin + view.xmax), cy = 0.5 * (view.ymin + view.ymax);
@@ -248,7 +294,7 @@ void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, co
   }
   win->Render();
 
-  detail::write_window_png(win, png_path, compression);
+  detail::write_window_png(win, png_path, compression, queue);
 }
 
 }  // namespace pmfrag::render

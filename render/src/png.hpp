@@ -5,6 +5,11 @@
 
 class vtkRenderWindow;
 
+namespace pmfrag::render {
+class PngQueue;
+}
+
 namespace pmfrag::render::detail {
-void write_window_png(vtkRenderWindow* window, const std::string& png_path, int compression);
+/// Writes at once, or, with a queue, hands a copy of the pixels to the queue's thread and returns.
+void write_window_png(vtkRenderWindow* window, const std::string& png_path, int compression, PngQueue* queue = nullptr);
 }

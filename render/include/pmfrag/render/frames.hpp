@@ -4,6 +4,7 @@
 #pragma once
 
 #include "pmfrag/render/headless.hpp"
+#include "pmfrag/render/png_queue.hpp"
 
 #include <string>
 #include <vector>
@@ -26,17 +27,23 @@ struct View {
   double zmin = 0, zmax = 0;
 };
 
+/// What a line overlay is: an intact bond (dark grey), a broken bond (red), a displacement vector (black).
+enum class SegmentKind : unsigned char { intact_bond, broken_bond, vector };
+
 struct FramePicture {
   std::vector<double> xyz;    ///< 3 per particle [cm]
   std::vector<double> value;  ///< one per particle (field value, or category index)
+  std::vector<double> segments;             ///< optional lines drawn over the particles: 6 per segment [cm]
+  std::vector<SegmentKind> segment_kinds;   ///< one per segment
   double time = 0.0;          ///< s
   std::string caption;        ///< under the time in panels, e.g. "(b)"
 };
 
 /// Renders pictures side by side (one or more) into a PNG of panel_w*count x panel_h (+ a title strip when
-/// title is not empty). Throws std::runtime_error if the PNG cannot be written.
+/// title is not empty). Throws std::runtime_error if the PNG cannot be written. With a queue the PNG is
+/// encoded on the queue's thread (errors surface from a later push or PngQueue::finish()).
 void render_png(HeadlessWindow& window, const View& view, const FieldSpec& field,
                 const std::vector<FramePicture>& pictures, const std::string& title, int panel_w, int panel_h,
-                const std::string& png_path, int png_compression = 4);
+                const std::string& png_path, int png_compression = 4, PngQueue* queue = nullptr);
 
 }  // namespace pmfrag::render
