@@ -5,6 +5,7 @@
 #include "cmd_sweep.hpp"
 
 #include "parse.hpp"
+#include "mpi_world.hpp"
 #include "process.hpp"
 #include "run_files.hpp"
 #include "pmfrag/material.hpp"
@@ -42,7 +43,23 @@ bool finished(const fs::path& dir) {
   return fs::exists(dir / "summary.json") && slurp(dir / "run.json").find("\"completed\": true") != std::string::npos;
 }
 
+// Why a case failed, in its folder (error.txt) and on the terminal.
+void record_failure(const fs::path& dir, const std::string& name, int status, const std::string& who) {
+  std::string why = json_string(slurp(dir / "run.json"), "message");
+  if (why.empty()) {  // the last line the worker printed
+    const std::string log = slurp(dir / "log.txt");
+    auto end = log.find_last_not_of('\n');
+    auto from = end == std::string::npos ? 0 : log.rfind('\n', end);
+    why = end == std::string::npos ? "no output" : log.substr(from == std::string::npos ? 0 : from + 1, end - from);
+  }
+  if (WIFSIGNALED(status)) why = "killed by signal " + std::to_string(WTERMSIG(status)) + "; " + why;
+  std::ofstream(dir / "error.txt") << why << "\n";
+  std::printf("%s  %-24s FAILED: %s\n", who.c_str(), name.c_str(), why.c_str());
+}
+
 void sweep(const SweepCli& o) {
+  MpiWorld world;  // one rank unless mpirun started us
+  const bool lead = world.rank() == 0;
   SweepSpec spec = read_sweep_spec(o.spec);
   if (!o.pairs.empty()) {
     std::vector<std::array<int, 2>> keep;
@@ -57,26 +74,38 @@ void sweep(const SweepCli& o) {
   const double r0 = build_system(base).r0;
   const auto cases = sweep_cases(spec, base.phases.size());
   const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  const int jobs = o.jobs > 0 ? o.jobs : std::min<int>(cores, static_cast<int>(cases.size()));
-  const int threads = std::max(1, cores / std::max(1, jobs));
-  fs::create_directories(o.out);
-  std::printf("sweep %s: %zu cases of %s, %d worker processes x %d threads\n", o.spec.c_str(), cases.size(),
-              spec.base.c_str(), jobs, threads);
+  // Under mpirun each rank runs one case at a time with its share of the node's cores; alone, a local pool.
+  const int jobs = world.size() > 1 ? 1 : o.jobs > 0 ? o.jobs : std::min<int>(cores, static_cast<int>(cases.size()));
+  const int threads = std::max(1, cores / std::max(1, world.size() > 1 ? world.local_size() : jobs));
+  const std::string who = world.size() > 1 ? "[rank " + std::to_string(world.rank()) + "]" : "";
+  if (lead) {
+    fs::create_directories(o.out);
+    if (world.size() > 1)
+      std::printf("sweep %s: %zu cases of %s, %d MPI ranks x %d threads, cases handed out as ranks free up\n",
+                  o.spec.c_str(), cases.size(), spec.base.c_str(), world.size(), threads);
+    else
+      std::printf("sweep %s: %zu cases of %s, %d worker processes x %d threads\n", o.spec.c_str(), cases.size(),
+                  spec.base.c_str(), jobs, threads);
+  }
 
   std::vector<std::size_t> todo;
   for (std::size_t c = 0; c < cases.size(); ++c) {
     const fs::path dir = fs::path(o.out) / cases[c].name;
     if (finished(dir)) {
-      std::printf("  %-24s finished before: skipped\n", cases[c].name.c_str());
+      if (lead) std::printf("  %-24s finished before: skipped\n", cases[c].name.c_str());
     } else {
-      fs::remove_all(dir);
-      fs::create_directories(dir);
+      if (lead) {
+        fs::remove_all(dir);
+        fs::create_directories(dir);
+      }
       todo.push_back(c);
     }
   }
+  std::fflush(stdout);
+  world.barrier();  // the case folders are ready before any rank starts
   std::map<pid_t, std::pair<std::size_t, int>> running;  // pid -> (case, stage: 1 run, 2 fragments)
   std::size_t next = 0;
-  auto start = [&](std::size_t c, int stage) {
+  auto start = [&](std::size_t c, int stage) -> pid_t {
     const fs::path dir = fs::path(o.out) / cases[c].name;
     std::vector<std::string> args{"pmfrag"};
     if (stage == 1) {
@@ -85,10 +114,32 @@ void sweep(const SweepCli& o) {
     } else {
       args.insert(args.end(), {"fragments", dir.string()});
     }
-    running[start_process("/proc/self/exe", args, dir / "log.txt")] = {c, stage};
+    return start_process("/proc/self/exe", args, dir / "log.txt");
   };
-  while (next < todo.size() || !running.empty()) {
-    while (static_cast<int>(running.size()) < jobs && next < todo.size()) start(todo[next++], 1);
+  if (world.size() > 1) {
+    // Each case start to end (run, then fragments) on whichever rank asks next.
+    world.distribute(static_cast<int>(todo.size()), [&](int i) {
+      const std::size_t c = todo[static_cast<std::size_t>(i)];
+      const fs::path dir = fs::path(o.out) / cases[c].name;
+      for (int stage = 1; stage <= 2; ++stage) {
+        const pid_t pid = start(c, stage);
+        int status = 0;
+        ::waitpid(pid, &status, 0);
+        if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+          record_failure(dir, cases[c].name, status, who);
+          std::fflush(stdout);
+          return;
+        }
+      }
+      std::printf("%s  %-24s done\n", who.c_str(), cases[c].name.c_str());
+      std::fflush(stdout);
+    });
+  }
+  while (world.size() == 1 && (next < todo.size() || !running.empty())) {
+    while (static_cast<int>(running.size()) < jobs && next < todo.size()) {
+      const std::size_t c = todo[next++];
+      running[start(c, 1)] = {c, 1};
+    }
     int status = 0;
     const pid_t pid = ::wait(&status);
     if (pid < 0) break;
@@ -99,26 +150,18 @@ void sweep(const SweepCli& o) {
     const fs::path dir = fs::path(o.out) / cases[c].name;
     const bool ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
     if (ok && stage == 1) {
-      start(c, 2);
+      running[start(c, 2)] = {c, 2};
       continue;
     }
     if (!ok) {
-      std::string why = json_string(slurp(dir / "run.json"), "message");
-      if (why.empty()) {  // the last line the worker printed
-        const std::string log = slurp(dir / "log.txt");
-        auto end = log.find_last_not_of('\n');
-        auto from = end == std::string::npos ? 0 : log.rfind('\n', end);
-        why = end == std::string::npos ? "no output" : log.substr(from == std::string::npos ? 0 : from + 1, end - from);
-      }
-      if (WIFSIGNALED(status)) why = "killed by signal " + std::to_string(WTERMSIG(status)) + "; " + why;
-      std::ofstream(dir / "error.txt") << why << "\n";
-      std::printf("  %-24s FAILED: %s\n", cases[c].name.c_str(), why.c_str());
+      record_failure(dir, cases[c].name, status, who);
     } else {
       std::printf("  %-24s done\n", cases[c].name.c_str());
     }
     std::fflush(stdout);
   }
 
+  if (!lead) return;  // rank 0 gathers every case's folder into sweep.csv
   const fs::path csv = fs::path(o.out) / "sweep.csv";
   {
     std::ofstream f(csv.string() + ".tmp");
