@@ -299,7 +299,7 @@ void sweep_figures(const std::string& dir, const std::string& prefix) {
 }  // namespace
 
 void add_study_command(CLI::App& app) {
-  auto* study = app.add_subcommand("study", "Comparative studies: accuracy against wall time");
+  auto* study = app.add_subcommand("study", "Comparative studies: accuracy against wall time, sweep charts, the paper's parameter figures");
   study->require_subcommand(1);
   auto o = std::make_shared<StudyCli>();
   auto* acc = study->add_subcommand(
@@ -319,6 +319,7 @@ void add_study_command(CLI::App& app) {
   fig->add_option("sweep_dir", dir->first, "Folder holding sweep.csv")->required();
   fig->add_option("--prefix", dir->second, "PNG path prefix (default SWEEP_DIR/sweep): PREFIX_times.png, PREFIX_fragments.png");
   fig->callback([dir] { sweep_figures(dir->first, dir->second.empty() ? dir->first + "/sweep" : dir->second); });
+  add_study_figures_command(*study);
 }
 
 }  // namespace pmfrag::app

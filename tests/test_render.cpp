@@ -10,6 +10,7 @@
 #include <vtkSmartPointer.h>
 
 #include <cstdlib>
+#include <limits>
 
 using namespace pmfrag;
 
@@ -126,6 +127,36 @@ TEST(Render, BondsAndVectorsDrawOverTheParticlesInTheirColours) {
   EXPECT_TRUE(near(b, px(0.25), py(-0.25), {213, 30, 30})) << "broken bond, red";
   EXPECT_TRUE(near(b, px(0.0), py(-0.75), {0, 0, 0})) << "vector, black";
   EXPECT_FALSE(near(a, px(0.0), py(-0.75), {0, 0, 0}));
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Render, HeatmapColoursCellsByValueAndLeavesEmptyCellsWhite) {
+  const auto dir = test::temp_dir("heatmap");
+  render::HeadlessWindow window(400, 400);
+  // 2 x 2 grid: low, high / empty, middle. The lowest value maps to the ramp's dark purple end, the highest
+  // to its yellow end.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const render::HeatmapSpec map{"t", "p", "q", "E", 1, 1, 2, 2, {0.0, 10.0, nan, 5.0}};
+  const std::string png = (dir / "map.png").string();
+  render::render_heatmap_png(window, map, 400, 400, png);
+  const Image im = read_png(png);
+  ASSERT_EQ(im.w, 400);
+  auto count = [&](std::array<int, 3> want) {
+    int n = 0;
+    for (int x = 0; x < im.w; ++x)
+      for (int y = 0; y < im.h; ++y) {
+        const auto c = im.at(x, y);
+        n += std::abs(c[0] - want[0]) < 12 && std::abs(c[1] - want[1]) < 12 && std::abs(c[2] - want[2]) < 12;
+      }
+    return n;
+  };
+  // Each cell is roughly a quarter of the plot area (well over 3000 px at this size); the colour legend adds
+  // a strip of each colour too.
+  EXPECT_GT(count({68, 1, 84}), 3000) << "lowest value: dark purple";
+  EXPECT_GT(count({253, 231, 37}), 3000) << "highest value: yellow";
+  EXPECT_GT(count({33, 145, 140}), 3000) << "middle value: teal";
+  EXPECT_THROW(render::render_heatmap_png(window, {"t", "p", "q", "E", 1, 1, 2, 2, {1.0}}, 400, 400, png),
+               std::invalid_argument);
   std::filesystem::remove_all(dir);
 }
 

@@ -3,7 +3,11 @@
 #include "png.hpp"
 
 #include <vtkAxis.h>
+#include <vtkChartHistogram2D.h>
 #include <vtkChartLegend.h>
+#include <vtkColorLegend.h>
+#include <vtkColorTransferFunction.h>
+#include <vtkImageData.h>
 #include <vtkChartXY.h>
 #include <vtkContextScene.h>
 #include <vtkContextView.h>
@@ -21,6 +25,8 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
+#include <string>
 
 namespace pmfrag::render {
 
@@ -101,6 +107,61 @@ void render_chart_png(HeadlessWindow& window, const ChartSpec& spec, int w, int 
     axes[a]->SetCustomTickPositions(ticks, labels);
     axes[a]->SetBehavior(vtkAxis::FIXED);
     axes[a]->SetRange(from, to);
+  }
+  win->Render();
+  detail::write_window_png(win, png_path, 4);
+  view->GetRenderer()->RemoveAllViewProps();
+  win->RemoveRenderer(view->GetRenderer());
+}
+
+void render_heatmap_png(HeadlessWindow& window, const HeatmapSpec& map, int w, int h, const std::string& png_path) {
+  if (map.nx < 1 || map.ny < 1 || map.values.size() != static_cast<std::size_t>(map.nx) * static_cast<std::size_t>(map.ny))
+    throw std::invalid_argument("heat map: " + std::to_string(map.values.size()) + " values for a " +
+                                std::to_string(map.nx) + " x " + std::to_string(map.ny) + " grid");
+  vtkGenericOpenGLRenderWindow* win = window.window();
+  win->SetSize(w, h);
+  vtkNew<vtkContextView> view;
+  view->SetRenderWindow(win);
+  view->GetRenderer()->SetBackground(1.0, 1.0, 1.0);
+  vtkNew<vtkChartHistogram2D> chart;
+  view->GetScene()->AddItem(chart);
+  // Cell centres on the integers: the image's points are the cells.
+  vtkNew<vtkImageData> image;
+  image->SetExtent(0, map.nx - 1, 0, map.ny - 1, 0, 0);
+  image->SetOrigin(map.x0, map.y0, 0.0);
+  image->SetSpacing(1.0, 1.0, 1.0);
+  image->AllocateScalars(VTK_DOUBLE, 1);
+  double lo = INFINITY, hi = -INFINITY;
+  for (int j = 0; j < map.ny; ++j)
+    for (int i = 0; i < map.nx; ++i) {
+      const double v = map.values[static_cast<std::size_t>(j) * static_cast<std::size_t>(map.nx) + static_cast<std::size_t>(i)];
+      *static_cast<double*>(image->GetScalarPointer(i, j, 0)) = v;
+      if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
+    }
+  if (!(hi >= lo)) lo = 0.0, hi = 1.0;
+  chart->SetInputData(image);
+  // The same viridis-like ramp as the particle frames; empty cells white.
+  vtkNew<vtkColorTransferFunction> ramp;
+  const double anchors[5][3] = {{0.267, 0.005, 0.329}, {0.231, 0.322, 0.545}, {0.129, 0.569, 0.549},
+                                {0.369, 0.788, 0.384}, {0.993, 0.906, 0.144}};
+  for (int k = 0; k < 5; ++k) ramp->AddRGBPoint(lo + (hi - lo) * k / 4.0, anchors[k][0], anchors[k][1], anchors[k][2]);
+  ramp->SetNanColor(1.0, 1.0, 1.0);
+  chart->SetTransferFunction(ramp);
+  chart->SetTitle(map.title);
+  chart->GetTitleProperties()->SetFontSize(18);
+  chart->GetAxis(vtkAxis::BOTTOM)->SetTitle(map.x_label);
+  chart->GetAxis(vtkAxis::LEFT)->SetTitle(map.y_label);
+  for (int a : {vtkAxis::BOTTOM, vtkAxis::LEFT}) {
+    vtkAxis* ax = chart->GetAxis(a);
+    ax->GetTitleProperties()->SetFontSize(16);
+    ax->GetLabelProperties()->SetFontSize(14);
+    ax->SetBehavior(vtkAxis::FIXED);
+  }
+  chart->GetAxis(vtkAxis::BOTTOM)->SetRange(map.x0 - 0.5, map.x0 + map.nx - 0.5);
+  chart->GetAxis(vtkAxis::LEFT)->SetRange(map.y0 - 0.5, map.y0 + map.ny - 0.5);
+  if (auto* legend = vtkColorLegend::SafeDownCast(chart->GetLegend())) {
+    legend->SetTitle(map.value_label);
+    legend->GetLabelProperties()->SetFontSize(14);
   }
   win->Render();
   detail::write_window_png(win, png_path, 4);

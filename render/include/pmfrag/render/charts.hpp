@@ -24,4 +24,16 @@ struct ChartSpec {
 /// non-positive coordinate on a log axis are left out.
 void render_chart_png(HeadlessWindow& window, const ChartSpec& chart, int w, int h, const std::string& png_path);
 
+/// A value over an integer grid (e.g. E over (p,q), the paper's Fig. 3): cell (x0 + i, y0 + j) holds
+/// values[j * nx + i]; NaN cells (no value, e.g. q <= p) are drawn white.
+struct HeatmapSpec {
+  std::string title, x_label, y_label, value_label;
+  int x0 = 0, y0 = 0, nx = 0, ny = 0;
+  std::vector<double> values;
+};
+
+/// Renders `map` at w x h pixels into `png_path`, with a colour legend. Throws std::invalid_argument if the
+/// values do not fill the grid.
+void render_heatmap_png(HeadlessWindow& window, const HeatmapSpec& map, int w, int h, const std::string& png_path);
+
 }  // namespace pmfrag::render
