@@ -138,7 +138,9 @@ void study_accuracy(const StudyCli& o) {
   fs::create_directories(o.out);
   std::vector<Row> rows;
 
-  const bool want_dt = o.knobs.find("dt") != std::string::npos, want_r0 = o.knobs.find("r0") != std::string::npos;
+  const bool want_dt = o.knobs.find("dt") != std::string::npos, want_r0 = o.knobs.find("r0") != std::string::npos,
+             want_float = o.knobs.find("precision") != std::string::npos;
+  if (want_float && !want_dt) throw UsageError("--knobs: precision is measured against the dt runs; add dt");
   // Time step: from 1e-8 s to near the limit; the finest run is the reference.
   std::vector<double> dts = o.dts.empty() ? std::vector<double>{1e-8, 2e-8, 5e-8, 1e-7, 2e-7, 0.9 * limit}
                                           : number_list("--dt", o.dts);
@@ -149,6 +151,14 @@ void study_accuracy(const StudyCli& o) {
   if (want_dt) std::printf("time step (stability limit %.4g s):\n", limit);
   if (want_dt)
     for (double dt : dts) by_dt.push_back(run_one(o, "dt", dt, {"time.dt=" + num(dt)}));
+  // Precision: the same time steps with the bond sweeps in single precision, against the same (double)
+  // reference; at the finest dt the difference is the rounding alone.
+  std::vector<Row> by_float;
+  if (want_float) {
+    std::printf("single precision bond sweeps (pair.precision = \"float\"):\n");
+    for (double dt : dts)
+      by_float.push_back(run_one(o, "float", dt, {"time.dt=" + num(dt), "pair.precision=\"float\""}));
+  }
   if (!by_dt.empty() && std::isfinite(by_dt.front().onset)) {
     const Row& ref = by_dt.front();
     // The reference's frame nearest 0.8 x its onset: runs whose dt divides the output interval have a frame
@@ -160,7 +170,11 @@ void study_accuracy(const StudyCli& o) {
     const auto x_ref = positions_at(rr, t_pre), x0 = rr.frame(0).position;
     double disp2 = 0;
     for (std::size_t i = 0; i < x_ref.size(); ++i) disp2 += (x_ref[i] - x0[i]) * (x_ref[i] - x0[i]);
-    for (auto& row : by_dt) {
+    std::vector<Row*> measured;
+    for (auto& row : by_dt) measured.push_back(&row);
+    for (auto& row : by_float) measured.push_back(&row);
+    for (Row* rp : measured) {
+      Row& row = *rp;
       H5mdReader rd((row.dir / "trajectory.h5").string());
       const auto x = positions_at(rd, t_pre);
       double e2 = 0;
@@ -171,6 +185,7 @@ void study_accuracy(const StudyCli& o) {
     }
   }
   rows.insert(rows.end(), by_dt.begin(), by_dt.end());
+  rows.insert(rows.end(), by_float.begin(), by_float.end());
 
   // Lattice spacing: the same body at several r0, each at a quarter of its own limit; finest r0 = reference.
   const bool can_scale = !sc.bodies.empty() && sc.bodies.front().lattice != LatticeKind::greenspan_plate;
@@ -221,10 +236,12 @@ void study_accuracy(const StudyCli& o) {
   chart.y_label = "relative error against the finest run";
   chart.log_x = chart.log_y = true;
   render::Series dt_pos{"dt: positions at 0.8 x onset", {}, {}}, dt_onset{"dt: onset time", {}, {}},
-      r0_onset{"r0: onset time", {}, {}};
+      r0_onset{"r0: onset time", {}, {}}, float_pos{"float (dt as above): positions at 0.8 x onset", {}, {}};
   for (const auto& r : rows) {
     if (r.status != "completed") continue;
-    if (r.knob == "dt") {
+    if (r.knob == "float") {
+      float_pos.x.push_back(r.wall), float_pos.y.push_back(r.position_error);
+    } else if (r.knob == "dt") {
       dt_pos.x.push_back(r.wall), dt_pos.y.push_back(r.position_error);
       dt_onset.x.push_back(r.wall), dt_onset.y.push_back(r.onset_error);
     } else {
@@ -233,6 +250,7 @@ void study_accuracy(const StudyCli& o) {
   }
   chart.series = {dt_pos, dt_onset};
   if (!r0_onset.x.empty()) chart.series.push_back(r0_onset);
+  if (!float_pos.x.empty()) chart.series.push_back(float_pos);
   const std::string png = o.png.empty() ? (fs::path(o.out) / "accuracy.png").string() : o.png;
   render::HeadlessWindow window(1000, 700);
   render::render_chart_png(window, chart, 1000, 700, png);
@@ -310,7 +328,7 @@ void add_study_command(CLI::App& app) {
   acc->add_option("--r0", o->r0s, "Lattice spacings [cm] (default 0.4,0.2,0.1; not for the Greenspan mesh)");
   acc->add_option("--set", o->set, "Override a scene key for every run, e.g. --set time.end=1.2e-2");
   acc->add_flag("--reuse", o->reuse, "Reuse runs already in OUT with the same scene and overrides (wall times as recorded)");
-  acc->add_option("--knobs", o->knobs, "Which knobs to turn: dt, r0 or both (default dt,r0)");
+  acc->add_option("--knobs", o->knobs, "Which knobs to turn: dt, r0, precision (float bond sweeps at each dt; needs dt) (default dt,r0)");
   acc->add_option("--png", o->png, "Where to write the chart (default OUT/accuracy.png)");
   acc->add_option("--threads", o->threads, "OpenMP threads per run (default: all cores)");
   acc->callback([o] { study_accuracy(*o); });

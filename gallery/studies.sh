@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The long studies behind the gallery's study figures (not part of CI):
-#   bash gallery/studies.sh accuracy   # dt and r0 against wall time: ~4 min on 2 cores
+#   bash gallery/studies.sh accuracy   # dt, float precision and r0 against wall time: ~6 min on 2 cores
 #   bash gallery/studies.sh sweep      # the slit plate over all 105 (p,q): ~25 min on 2 cores
+#   bash gallery/studies.sh figures    # the paper's Figs. 3, 7, 8, 10, 11 from the material model: 2 s
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/build > /dev/null
@@ -9,7 +10,7 @@ pmfrag=build/app/pmfrag
 case "${1:-}" in
   accuracy)
     "$pmfrag" study accuracy cases/slit_plate_rect_7_14.toml --out out/accuracy --set time.end=1.6e-2 \
-      --png gallery/accuracy_pareto.png
+      --knobs dt,r0,precision --png gallery/accuracy_pareto.png
     cp out/accuracy/accuracy.csv gallery/accuracy.csv
     ;;
   sweep)
@@ -18,5 +19,8 @@ case "${1:-}" in
     echo "sweep wall time: $(( $(date +%s) - start )) s"
     cp out/sweep_pq/sweep.csv gallery/sweep_pq.csv
     ;;
-  *) echo "usage: gallery/studies.sh accuracy|sweep" >&2; exit 2 ;;
+  figures)
+    "$pmfrag" study figures --out gallery
+    ;;
+  *) echo "usage: gallery/studies.sh accuracy|sweep|figures" >&2; exit 2 ;;
 esac

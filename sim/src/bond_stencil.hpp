@@ -17,15 +17,19 @@ namespace pmfrag::detail {
 
 /// F(r)/r of one bond (> 0 repulsive), 0 if the bond is gone or longer than sqrt(cut2); counts in `broke` a
 /// live bond found too long (broken for good the first time it exceeds D: the caller retires it).
-/// Branch-free, so the loops calling it vectorize.
-template <class Law>
+/// Branch-free, so the loops calling it vectorize. Real = float evaluates r², 1/r and the law in single
+/// precision (the breaking test stays in double, so a bond breaks at the same length either way).
+template <class Real, class Law>
 inline double bond_force_over_r(const Law& law, std::size_t k, double r2, bool live, double cut2, double inv_rmin,
                                 long& broke) {
   const bool within = r2 <= cut2;
   broke += live & !within;
-  const double inv = 1.0 / std::sqrt(live ? r2 : cut2);  // no bond here: keep the arithmetic finite
-  const double ie = std::min(inv, inv_rmin);             // force held constant inside r_min (Sec. 4.2)
-  return (live & within) ? law.magnitude(k, ie) * inv : 0.0;
+  const Real inv = Real(1) / std::sqrt(Real(live ? r2 : cut2));  // no bond here: keep the arithmetic finite
+  const Real ie = std::min(inv, Real(inv_rmin));                 // force held constant inside r_min (Sec. 4.2)
+  // Computed for every slot and masked by a multiplication: with a select, GCC 12 leaves the float variant
+  // unvectorized ("control flow in loop").
+  const double fr = static_cast<double>(law.template magnitude<Real>(k, ie) * inv);
+  return fr * static_cast<double>(live & within);
 }
 
 template <int D>
@@ -33,8 +37,10 @@ class BondStencil {
  public:
   BondStencil() = default;
   /// bonds (i < j) with their law index; n particles.
-  BondStencil(std::size_t n, const std::vector<int>& bi, const std::vector<int>& bj, const std::vector<int>& blaw) {
+  BondStencil(std::size_t n, const std::vector<int>& bi, const std::vector<int>& bj, const std::vector<int>& blaw,
+              bool single_precision = false) {
     n_ = n;
+    single_ = single_precision;
     std::map<int, std::size_t> count;
     for (std::size_t b = 0; b < bi.size(); ++b) ++count[bj[b] - bi[b]];
     std::map<int, int> group_of;
@@ -91,8 +97,18 @@ class BondStencil {
 #pragma omp for schedule(static)
       for (long p = 0; p < n; ++p)
         for (int c = 0; c < D; ++c) xs_[c][static_cast<std::size_t>(p)] = x[static_cast<std::size_t>(p) * D + c];
-      for (auto& g : groups_) sweep(g, law.with_ids(g.law.data()), cut2, inv_rmin, broke);
-      if (sparse_.size() > 0) sparse_pass(law.with_ids(sparse_.law.data()), cut2, inv_rmin, broke);
+      for (auto& g : groups_) {
+        if (single_)
+          sweep<float>(g, law.with_ids(g.law.data()), cut2, inv_rmin, broke);
+        else
+          sweep<double>(g, law.with_ids(g.law.data()), cut2, inv_rmin, broke);
+      }
+      if (sparse_.size() > 0) {
+        if (single_)
+          sparse_pass<float>(law.with_ids(sparse_.law.data()), cut2, inv_rmin, broke);
+        else
+          sparse_pass<double>(law.with_ids(sparse_.law.data()), cut2, inv_rmin, broke);
+      }
 #pragma omp barrier
       // Assembly: f_i += F[o + i] - F[i] for each offset, in a fixed order (the same static partition of
       // particles for every loop, so no barrier is needed between them).
@@ -124,7 +140,7 @@ class BondStencil {
   };
 
   // Evaluate one offset's bonds (inside a parallel region).
-  template <class Law>
+  template <class Real, class Law>
   void sweep(Group& g, const Law law, double cut2, double inv_rmin, long& broke) {
     const long m = static_cast<long>(n_) - g.offset;
     const std::size_t o = static_cast<std::size_t>(g.offset);
@@ -140,14 +156,14 @@ class BondStencil {
       const std::size_t i = static_cast<std::size_t>(p);
       const double d0 = x0[i] - x0[i + o], d1 = x1[i] - x1[i + o];
       const double d2 = D == 3 ? x2[i] - x2[i + o] : 0.0;
-      const double fr = bond_force_over_r(law, i, d0 * d0 + d1 * d1 + d2 * d2, alive[i] != 0, cut2, inv_rmin, broke);
+      const double fr = bond_force_over_r<Real>(law, i, d0 * d0 + d1 * d1 + d2 * d2, alive[i] != 0, cut2, inv_rmin, broke);
       F0[i] = fr * d0;
       F1[i] = fr * d1;
       if constexpr (D == 3) F2[i] = fr * d2;
     }
   }
 
-  template <class Law>
+  template <class Real, class Law>
   void sparse_pass(const Law law, double cut2, double inv_rmin, long& broke) {
     const long m = static_cast<long>(sparse_.size());
     const int* __restrict pi = sparse_.i.data();
@@ -159,7 +175,7 @@ class BondStencil {
       const std::size_t a = static_cast<std::size_t>(pi[u]), b = static_cast<std::size_t>(pj[u]);
       const double d0 = xs_[0][a] - xs_[0][b], d1 = xs_[1][a] - xs_[1][b];
       const double d2 = D == 3 ? xs_[D - 1][a] - xs_[D - 1][b] : 0.0;
-      const double fr = bond_force_over_r(law, u, d0 * d0 + d1 * d1 + d2 * d2, alive[u] != 0, cut2, inv_rmin, broke);
+      const double fr = bond_force_over_r<Real>(law, u, d0 * d0 + d1 * d1 + d2 * d2, alive[u] != 0, cut2, inv_rmin, broke);
       sparse_.force[0][u] = fr * d0;
       sparse_.force[1][u] = fr * d1;
       if constexpr (D == 3) sparse_.force[D - 1][u] = fr * d2;
@@ -167,6 +183,7 @@ class BondStencil {
   }
 
   std::size_t n_ = 0;
+  bool single_ = false;
   std::vector<Group> groups_;
   PairTable<D> sparse_;
   std::vector<std::uint8_t> sparse_alive_;

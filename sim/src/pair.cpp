@@ -39,7 +39,7 @@ class PairEffect final : public Effect<D> {
     for (const auto& b : sys.bonds) bi_.push_back(b[0]), bj_.push_back(b[1]), blaw_.push_back(law_of(b[0], b[1]));
     alive_.assign(bi_.size(), 1);
     phi_break_.assign(bi_.size(), 0.0);
-    if (spec_.model == PairModel::bonded) stencil_ = detail::BondStencil<D>(n_, bi_, bj_, blaw_);
+    if (spec_.model == PairModel::bonded) stencil_ = detail::BondStencil<D>(n_, bi_, bj_, blaw_, spec_.single_precision);
     contact_reach_.resize(laws_.size());
     for (std::size_t l = 0; l < laws_.size(); ++l) contact_reach_[l] = laws_[l].equilibrium_spacing();
     max_reach_ = spec_.model == PairModel::cutoff ? cutoff_ : *std::max_element(contact_reach_.begin(), contact_reach_.end());
@@ -273,7 +273,7 @@ class PairEffect final : public Effect<D> {
     std::sort(found.begin(), found.end());
     for (const auto& [a, b] : found) list_.add(a, b, law_of(a, b));
     list_.index(n_);
-    if (spec_.model == PairModel::cutoff) list_stencil_ = detail::BondStencil<D>(n_, list_.i, list_.j, list_.law);
+    if (spec_.model == PairModel::cutoff) list_stencil_ = detail::BondStencil<D>(n_, list_.i, list_.j, list_.law, spec_.single_precision);
     moved_bound_ = 0.0;
   }
 

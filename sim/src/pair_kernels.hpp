@@ -7,42 +7,62 @@
 #include <Eigen/Core>
 
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 namespace pmfrag::detail {
 
-template <int N>
-inline double pw(double x) {
+template <int N, class T>
+inline T pw(T x) {
   if constexpr (N == 0) {
-    return 1.0;
+    return T(1);
   } else if constexpr (N == 1) {
     return x;
   } else if constexpr (N % 2 == 0) {
-    const double h = pw<N / 2>(x);
+    const T h = pw<N / 2>(x);
     return h * h;
   } else {
     return x * pw<N - 1>(x);
   }
 }
 
-/// |F| of the law from 1/r, positive = repulsive. `with_ids` binds the per-pair law index array of a loop.
+/// x^n for a runtime n >= 0, in the arithmetic of T.
+template <class T>
+inline T ipow_t(T x, int n) {
+  T r = T(1);
+  for (; n > 0; n >>= 1, x *= x)
+    if (n & 1) r *= x;
+  return r;
+}
+
+/// |F| of the law from 1/r, positive = repulsive, in the arithmetic of T (double, or float for the
+/// precision knob). `with_ids` binds the per-pair law index array of a loop.
 template <int P, int Q>
 struct FixedLaw {
   double G, H;
-  double magnitude(std::size_t, double ie) const { return -G * pw<P>(ie) + H * pw<Q>(ie); }
+  template <class T = double>
+  T magnitude(std::size_t, T ie) const {
+    return -T(G) * pw<P>(ie) + T(H) * pw<Q>(ie);
+  }
   FixedLaw with_ids(const int*) const { return *this; }
 };
 struct OneLaw {
   PairLaw law;
-  double magnitude(std::size_t, double ie) const { return -law.G * ipow(ie, law.p) + law.H * ipow(ie, law.q); }
+  template <class T = double>
+  T magnitude(std::size_t, T ie) const {
+    if constexpr (std::is_same_v<T, double>) return -law.G * ipow(ie, law.p) + law.H * ipow(ie, law.q);
+    return -T(law.G) * ipow_t(ie, law.p) + T(law.H) * ipow_t(ie, law.q);
+  }
   OneLaw with_ids(const int*) const { return *this; }
 };
 struct ManyLaws {
   const PairLaw* laws;
   const int* id;
-  double magnitude(std::size_t u, double ie) const {
+  template <class T = double>
+  T magnitude(std::size_t u, T ie) const {
     const PairLaw& l = laws[id[u]];
-    return -l.G * ipow(ie, l.p) + l.H * ipow(ie, l.q);
+    if constexpr (std::is_same_v<T, double>) return -l.G * ipow(ie, l.p) + l.H * ipow(ie, l.q);
+    return -T(l.G) * ipow_t(ie, l.p) + T(l.H) * ipow_t(ie, l.q);
   }
   ManyLaws with_ids(const int* ids) const { return ManyLaws{laws, ids}; }
 };

@@ -448,6 +448,11 @@ Scene parse_scene(const std::string& text, const std::string& file, const std::v
     p.r_min_r0 = t.number("r_min", 0.0);
     if (p.r_min_r0 < 0.0 || p.r_min_r0 >= 1.0) t.fail_at(t.get("r_min"), "r_min", "r_min / r0 must be in [0, 1)");
     p.contact = t.boolean("contact", true);
+    const std::string precision = t.string("precision", "double");
+    if (precision == "float")
+      p.single_precision = true;
+    else if (precision != "double")
+      t.fail_at(t.get("precision"), "precision", "expected \"double\" or \"float\" (got \"" + precision + "\")");
     t.done();
     sc.pair = p;
   }

@@ -57,6 +57,9 @@ struct PairSpec {
   double cutoff_r0 = 1.7;  ///< D / r0
   double r_min_r0 = 0.0;   ///< force held constant inside r_min (0 = no clamp)
   bool contact = true;     ///< bonded: unbonded particles closer than r0 repel
+  /// Arithmetic of the bond sweeps: false = double (default); true = single precision for r², 1/r and the
+  /// law (differences of positions and all sums stay double) - the accuracy study's precision knob.
+  bool single_precision = false;
 };
 
 struct Selection {
