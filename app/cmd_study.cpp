@@ -338,6 +338,7 @@ void add_study_command(CLI::App& app) {
   fig->add_option("--prefix", dir->second, "PNG path prefix (default SWEEP_DIR/sweep): PREFIX_times.png, PREFIX_fragments.png");
   fig->callback([dir] { sweep_figures(dir->first, dir->second.empty() ? dir->first + "/sweep" : dir->second); });
   add_study_figures_command(*study);
+  add_study_modulus_command(*study);
 }
 
 }  // namespace pmfrag::app
