@@ -66,6 +66,15 @@ TEST(Scene, CloseBlockCountsAndNeighbours) {
       ++nb[b[0]], ++nb[b[1]];
     }
     EXPECT_EQ(*std::max_element(nb.begin(), nb.end()), 12) << stacking;  // close packing
+    // The pulled faces are the outermost row of every close-packed layer (41 sites x 20 layers), not only
+    // of the layers that happen to reach the extreme y.
+    for (auto kind : {Selection::Kind::top_row, Selection::Kind::bottom_row}) {
+      const auto rows = select_particles(sys, Selection{kind, {}, {}}, "t");
+      EXPECT_EQ(rows.size(), 41u * 20u) << stacking;
+      std::set<long> layers;
+      for (int i : rows) layers.insert(std::lround(sys.position[static_cast<std::size_t>(i)].z() / 0.01));
+      EXPECT_EQ(layers.size(), 20u) << stacking;
+    }
   }
 }
 

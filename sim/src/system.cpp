@@ -164,7 +164,11 @@ std::vector<int> select_particles(const System& sys, const Selection& sel, const
   if (sel.kind == Selection::Kind::top_row || sel.kind == Selection::Kind::bottom_row) {
     double ext = sel.kind == Selection::Kind::top_row ? -INFINITY : INFINITY;
     for (const auto& x : sys.position) ext = sel.kind == Selection::Kind::top_row ? std::max(ext, x.y()) : std::min(ext, x.y());
-    const double band = 0.25 * sys.r0;  // rows are r0 sin60 = 0.87 r0 apart
+    // 2-D: rows are r0 sin60 = 0.87 r0 apart, so a quarter of r0 takes one row. 3-D: close-packed layers are
+    // shifted by a third of that in y (fcc: 0, 0.29 and 0.58 r0; hcp: 0 and 0.29 r0), so the face is the
+    // outermost row of every layer: 0.7 r0 takes them all and none of the next rows (0.87 r0 and beyond).
+    // A narrower band pulled one layer in three and tore it out of the block.
+    const double band = (sys.dim == 3 ? 0.7 : 0.25) * sys.r0;
     for (std::size_t i = 0; i < n; ++i)
       if (std::fabs(sys.position[i].y() - ext) < band) out.push_back(static_cast<int>(i));
   } else {
