@@ -3,8 +3,7 @@
 # argument and a non-zero exit.
 set -u
 pmfrag=$1
-fail=0
-check() { if ! eval "$2"; then echo "FAIL: $1"; fail=1; else echo "ok: $1"; fi; }
+source "$(dirname "$0")/check.sh"
 
 json=$("$pmfrag" material --pq 7,14 --json)
 check "json parses and matches Table 1 (7,14)" "python3 - <<PY

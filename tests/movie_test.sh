@@ -4,8 +4,7 @@
 #   movie_test.sh PMFRAG SOURCE_DIR
 set -u
 pmfrag=$1 src=$2
-fail=0
-check() { if ! eval "$2"; then echo "FAIL: $1"; fail=1; else echo "ok: $1"; fi; }
+source "$(dirname "$0")/check.sh"
 d=$(mktemp -d)
 trap 'rm -rf "$d"' EXIT
 "$pmfrag" run "$src/cases/impact.toml" --out "$d/run" -q --set time.end=2e-4 --set output.every=2e-5 > /dev/null || exit 1

@@ -4,8 +4,7 @@
 #   sweep_mpi_test.sh PMFRAG SOURCE_DIR
 set -u
 pmfrag=$1 src=$2
-fail=0
-check() { if ! eval "$2"; then echo "FAIL: $1"; fail=1; else echo "ok: $1"; fi; }
+source "$(dirname "$0")/check.sh"
 d=$(mktemp -d)
 trap 'rm -rf "$d"' EXIT
 cat > "$d/spec.toml" <<TOML

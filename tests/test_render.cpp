@@ -36,6 +36,14 @@ Image read_png(const std::string& path) {
   return im;
 }
 bool white(const std::array<int, 3>& c) { return c[0] > 250 && c[1] > 250 && c[2] > 250; }
+// The 2 x 2 cm square around the origin, discs of radius 0.08 cm: where the pixel tests expect things.
+render::View unit_view() {
+  render::View view;
+  view.xmin = view.ymin = -1.0;
+  view.xmax = view.ymax = 1.0;
+  view.radius = 0.08;
+  return view;
+}
 }  // namespace
 
 TEST(Render, ParticlesAppearWhereProjectedInTheirColours) {
@@ -43,10 +51,7 @@ TEST(Render, ParticlesAppearWhereProjectedInTheirColours) {
   ASSERT_TRUE(display == nullptr || *display == '\0');
   const auto dir = test::temp_dir("render");
   render::HeadlessWindow window(300, 300);
-  render::View view;
-  view.xmin = view.ymin = -1.0;
-  view.xmax = view.ymax = 1.0;
-  view.radius = 0.08;
+  const render::View view = unit_view();
   render::FieldSpec field;
   field.categorical = true;
   field.title = "fragment";
@@ -93,10 +98,7 @@ TEST(Render, ParticlesAppearWhereProjectedInTheirColours) {
 TEST(Render, BondsAndVectorsDrawOverTheParticlesInTheirColours) {
   const auto dir = test::temp_dir("overlay");
   render::HeadlessWindow window(300, 300);
-  render::View view;
-  view.xmin = view.ymin = -1.0;
-  view.xmax = view.ymax = 1.0;
-  view.radius = 0.08;
+  const render::View view = unit_view();
   render::FieldSpec field;
   field.categorical = true;
   render::FramePicture pic;

@@ -24,6 +24,7 @@ extern "C" __attribute__((visibility("default"))) void (*glXGetProcAddressARB(co
 extern "C" __attribute__((visibility("default"))) void (*glXGetProcAddress(const unsigned char* name))() {
   return glXGetProcAddressARB(name);
 }
+#include "adopt_context.hpp"
 #include "glew_shim.hpp"
 
 namespace pmfrag::render {
@@ -46,7 +47,6 @@ void is_current_cb(vtkObject*, unsigned long, void* client, void* call) {
   auto* m = static_cast<HeadlessWindow::Impl*>(client);
   *static_cast<bool*>(call) = OSMesaGetCurrentContext() == m->context;
 }
-void supports_cb(vtkObject*, unsigned long, void*, void* call) { *static_cast<bool*>(call) = true; }
 
 }  // namespace
 
@@ -71,15 +71,7 @@ HeadlessWindow::HeadlessWindow(int width, int height) : impl_(std::make_unique<I
   m.make_current->SetClientData(&m);
   m.is_current->SetCallback(is_current_cb);
   m.is_current->SetClientData(&m);
-  m.supports->SetCallback(supports_cb);
-  m.window->AddObserver(vtkCommand::WindowMakeCurrentEvent, m.make_current);
-  m.window->AddObserver(vtkCommand::WindowIsCurrentEvent, m.is_current);
-  m.window->AddObserver(vtkCommand::WindowSupportsOpenGLEvent, m.supports);
-  m.window->SetMultiSamples(0);  // software rasterization: multisampling would multiply the fragment work
-  m.window->SetSize(width, height);
-  m.window->SetOffScreenRendering(1);
-  m.window->InitializeFromCurrentContext();
-  m.window->SetFrameBlitModeToNoBlit();
+  detail::adopt_current_context(m.window, {m.make_current, m.is_current, m.supports}, width, height);
 }
 
 HeadlessWindow::~HeadlessWindow() {
