@@ -9,15 +9,24 @@
 
 namespace pmfrag::render::detail {
 
+using ContextFn = void (*)(vtkObject*, unsigned long, void* client, void* call_data);
+
 struct ContextCallbacks {
-  vtkCallbackCommand* make_current;  ///< client data and callback set by the caller
-  vtkCallbackCommand* is_current;    ///< sets *static_cast<bool*>(call_data)
-  vtkCallbackCommand* supports;      ///< answers "supports OpenGL" with true
+  vtkCallbackCommand* make_current;  ///< commands owned by the caller's window state
+  vtkCallbackCommand* is_current;
+  vtkCallbackCommand* supports;
+  ContextFn make_current_fn;  ///< makes the context current
+  ContextFn is_current_fn;    ///< sets *static_cast<bool*>(call_data)
+  void* client;               ///< handed to both functions
 };
 
 /// Wires the callbacks into `window` and initializes it from the context current now.
 inline void adopt_current_context(vtkGenericOpenGLRenderWindow* window, const ContextCallbacks& cb, int width,
                                   int height) {
+  cb.make_current->SetCallback(cb.make_current_fn);
+  cb.make_current->SetClientData(cb.client);
+  cb.is_current->SetCallback(cb.is_current_fn);
+  cb.is_current->SetClientData(cb.client);
   cb.supports->SetCallback([](vtkObject*, unsigned long, void*, void* call) { *static_cast<bool*>(call) = true; });
   window->AddObserver(vtkCommand::WindowMakeCurrentEvent, cb.make_current);
   window->AddObserver(vtkCommand::WindowIsCurrentEvent, cb.is_current);

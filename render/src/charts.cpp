@@ -1,6 +1,7 @@
 #include "pmfrag/render/charts.hpp"
 
 #include "png.hpp"
+#include "ramp.hpp"
 
 #include <vtkAxis.h>
 #include <vtkChartHistogram2D.h>
@@ -18,6 +19,7 @@
 #include <vtkPlot.h>
 #include <vtkPlotPoints.h>
 #include <vtkRenderer.h>
+#include <vtkSmartPointer.h>
 #include <vtkStringArray.h>
 #include <vtkTable.h>
 #include <vtkTextProperty.h>
@@ -30,6 +32,33 @@
 
 namespace pmfrag::render {
 
+namespace {
+
+// A white w x h 2-D scene on the headless window, for one chart.
+vtkSmartPointer<vtkContextView> open_canvas(HeadlessWindow& window, int w, int h) {
+  window.window()->SetSize(w, h);
+  auto view = vtkSmartPointer<vtkContextView>::New();
+  view->SetRenderWindow(window.window());
+  view->GetRenderer()->SetBackground(1.0, 1.0, 1.0);
+  return view;
+}
+
+void style_axis(vtkAxis* axis, const std::string& title) {
+  axis->SetTitle(title);
+  axis->GetTitleProperties()->SetFontSize(16);
+  axis->GetLabelProperties()->SetFontSize(14);
+}
+
+// Renders the canvas into png_path and takes it off the window (the window serves the next chart).
+void write_canvas(HeadlessWindow& window, vtkContextView* view, const std::string& png_path) {
+  window.window()->Render();
+  detail::write_window_png(window.window(), png_path, 4);
+  view->GetRenderer()->RemoveAllViewProps();
+  window.window()->RemoveRenderer(view->GetRenderer());
+}
+
+}  // namespace
+
 void render_chart_png(HeadlessWindow& window, const ChartSpec& spec, int w, int h, const std::string& png_path) {
   // Okabe-Ito: distinguishable with the common colour-vision deficiencies, as in the particle frames.
   static constexpr std::array<std::array<unsigned char, 3>, 7> palette{{{0, 114, 178},
@@ -39,11 +68,7 @@ void render_chart_png(HeadlessWindow& window, const ChartSpec& spec, int w, int 
                                                                         {230, 159, 0},
                                                                         {86, 180, 233},
                                                                         {0, 0, 0}}};
-  vtkGenericOpenGLRenderWindow* win = window.window();
-  win->SetSize(w, h);
-  vtkNew<vtkContextView> view;
-  view->SetRenderWindow(win);
-  view->GetRenderer()->SetBackground(1.0, 1.0, 1.0);
+  const auto view = open_canvas(window, w, h);
   vtkNew<vtkChartXY> chart;
   view->GetScene()->AddItem(chart);
   chart->SetTitle(spec.title);
@@ -52,12 +77,8 @@ void render_chart_png(HeadlessWindow& window, const ChartSpec& spec, int w, int 
   chart->GetLegend()->GetLabelProperties()->SetFontSize(14);
   vtkAxis* x = chart->GetAxis(vtkAxis::BOTTOM);
   vtkAxis* y = chart->GetAxis(vtkAxis::LEFT);
-  x->SetTitle(spec.x_label);
-  y->SetTitle(spec.y_label);
-  for (vtkAxis* a : {x, y}) {
-    a->GetTitleProperties()->SetFontSize(16);
-    a->GetLabelProperties()->SetFontSize(14);
-  }
+  style_axis(x, spec.x_label);
+  style_axis(y, spec.y_label);
   // VTK 9.1's log axes draw no curves here (only the legend), so a log axis plots log10 of the values on a
   // linear axis with ticks at the decades, labelled with the values.
   auto coord = [](bool log, double v) { return log ? std::log10(v) : v; };
@@ -108,21 +129,14 @@ void render_chart_png(HeadlessWindow& window, const ChartSpec& spec, int w, int 
     axes[a]->SetBehavior(vtkAxis::FIXED);
     axes[a]->SetRange(from, to);
   }
-  win->Render();
-  detail::write_window_png(win, png_path, 4);
-  view->GetRenderer()->RemoveAllViewProps();
-  win->RemoveRenderer(view->GetRenderer());
+  write_canvas(window, view, png_path);
 }
 
 void render_heatmap_png(HeadlessWindow& window, const HeatmapSpec& map, int w, int h, const std::string& png_path) {
   if (map.nx < 1 || map.ny < 1 || map.values.size() != static_cast<std::size_t>(map.nx) * static_cast<std::size_t>(map.ny))
     throw std::invalid_argument("heat map: " + std::to_string(map.values.size()) + " values for a " +
                                 std::to_string(map.nx) + " x " + std::to_string(map.ny) + " grid");
-  vtkGenericOpenGLRenderWindow* win = window.window();
-  win->SetSize(w, h);
-  vtkNew<vtkContextView> view;
-  view->SetRenderWindow(win);
-  view->GetRenderer()->SetBackground(1.0, 1.0, 1.0);
+  const auto view = open_canvas(window, w, h);
   vtkNew<vtkChartHistogram2D> chart;
   view->GetScene()->AddItem(chart);
   // Cell centres on the integers: the image's points are the cells.
@@ -140,33 +154,25 @@ void render_heatmap_png(HeadlessWindow& window, const HeatmapSpec& map, int w, i
     }
   if (!(hi >= lo)) lo = 0.0, hi = 1.0;
   chart->SetInputData(image);
-  // The same viridis-like ramp as the particle frames; empty cells white.
+  // The same ramp as the particle frames; empty cells white.
   vtkNew<vtkColorTransferFunction> ramp;
-  const double anchors[5][3] = {{0.267, 0.005, 0.329}, {0.231, 0.322, 0.545}, {0.129, 0.569, 0.549},
-                                {0.369, 0.788, 0.384}, {0.993, 0.906, 0.144}};
+  const auto& anchors = detail::ramp_anchors;
   for (int k = 0; k < 5; ++k) ramp->AddRGBPoint(lo + (hi - lo) * k / 4.0, anchors[k][0], anchors[k][1], anchors[k][2]);
   ramp->SetNanColor(1.0, 1.0, 1.0);
   chart->SetTransferFunction(ramp);
   chart->SetTitle(map.title);
   chart->GetTitleProperties()->SetFontSize(18);
-  chart->GetAxis(vtkAxis::BOTTOM)->SetTitle(map.x_label);
-  chart->GetAxis(vtkAxis::LEFT)->SetTitle(map.y_label);
-  for (int a : {vtkAxis::BOTTOM, vtkAxis::LEFT}) {
-    vtkAxis* ax = chart->GetAxis(a);
-    ax->GetTitleProperties()->SetFontSize(16);
-    ax->GetLabelProperties()->SetFontSize(14);
-    ax->SetBehavior(vtkAxis::FIXED);
-  }
+  style_axis(chart->GetAxis(vtkAxis::BOTTOM), map.x_label);
+  style_axis(chart->GetAxis(vtkAxis::LEFT), map.y_label);
+  chart->GetAxis(vtkAxis::BOTTOM)->SetBehavior(vtkAxis::FIXED);
+  chart->GetAxis(vtkAxis::LEFT)->SetBehavior(vtkAxis::FIXED);
   chart->GetAxis(vtkAxis::BOTTOM)->SetRange(map.x0 - 0.5, map.x0 + map.nx - 0.5);
   chart->GetAxis(vtkAxis::LEFT)->SetRange(map.y0 - 0.5, map.y0 + map.ny - 0.5);
   if (auto* legend = vtkColorLegend::SafeDownCast(chart->GetLegend())) {
     legend->SetTitle(map.value_label);
     legend->GetLabelProperties()->SetFontSize(14);
   }
-  win->Render();
-  detail::write_window_png(win, png_path, 4);
-  view->GetRenderer()->RemoveAllViewProps();
-  win->RemoveRenderer(view->GetRenderer());
+  write_canvas(window, view, png_path);
 }
 
 }  // namespace pmfrag::render

@@ -1,6 +1,7 @@
 #include "pmfrag/render/frames.hpp"
 
 #include "png.hpp"
+#include "ramp.hpp"
 
 #include <vtkActor.h>
 #include <vtkActor2D.h>
@@ -55,9 +56,7 @@ vtkNew<vtkLookupTable> make_lut(const FieldSpec& f) {
     for (int k = 0; k < 8; ++k) lut->SetTableValue(k, palette[k][0], palette[k][1], palette[k][2], 1.0);
     lut->SetTableRange(0, 7);
   } else {
-    // A perceptual blue-to-yellow ramp (viridis-like endpoints through a few anchors).
-    const double anchors[5][3] = {{0.267, 0.005, 0.329}, {0.231, 0.322, 0.545}, {0.129, 0.569, 0.549},
-                                  {0.369, 0.788, 0.384}, {0.993, 0.906, 0.144}};
+    const auto& anchors = detail::ramp_anchors;
     lut->SetNumberOfTableValues(256);
     for (int k = 0; k < 256; ++k) {
       const double t = k / 255.0 * 4.0;

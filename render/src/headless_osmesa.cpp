@@ -67,11 +67,8 @@ HeadlessWindow::HeadlessWindow(int width, int height) : impl_(std::make_unique<I
   if (!OSMesaMakeCurrent(m.context, m.buffer.data(), GL_UNSIGNED_BYTE, width, height))
     throw NoGraphicsError("cannot make the OSMesa context current");
 
-  m.make_current->SetCallback(make_current_cb);
-  m.make_current->SetClientData(&m);
-  m.is_current->SetCallback(is_current_cb);
-  m.is_current->SetClientData(&m);
-  detail::adopt_current_context(m.window, {m.make_current, m.is_current, m.supports}, width, height);
+  detail::adopt_current_context(
+      m.window, {m.make_current, m.is_current, m.supports, make_current_cb, is_current_cb, &m}, width, height);
 }
 
 HeadlessWindow::~HeadlessWindow() {
