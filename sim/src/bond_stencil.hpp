@@ -110,23 +110,7 @@ class BondStencil {
           sparse_pass<double>(law.with_ids(sparse_.law.data()), cut2, inv_rmin, broke);
       }
 #pragma omp barrier
-      // Assembly: f_i += F[o + i] - F[i] for each offset, in a fixed order (the same static partition of
-      // particles for every loop, so no barrier is needed between them).
-      for (const Group& g : groups_) {
-        const std::size_t o = static_cast<std::size_t>(g.offset);
-        const double* __restrict F0 = g.F[0].data();
-        const double* __restrict F1 = g.F[1].data();
-        const double* __restrict F2 = g.F[D - 1].data();
-#pragma omp for simd schedule(static) nowait
-        for (long p = 0; p < n; ++p) {
-          const std::size_t i = static_cast<std::size_t>(p);
-          f[i * D] += F0[o + i] - F0[i];
-          f[i * D + 1] += F1[o + i] - F1[i];
-          if constexpr (D == 3) f[i * D + D - 1] += F2[o + i] - F2[i];
-        }
-      }
-#pragma omp barrier
-      if (sparse_.size() > 0) sparse_.gather(f);
+      assemble(f);
     }
     return broke;
   }
@@ -169,16 +153,68 @@ class BondStencil {
     const int* __restrict pi = sparse_.i.data();
     const int* __restrict pj = sparse_.j.data();
     const std::uint8_t* __restrict alive = sparse_alive_.data();
-#pragma omp for schedule(static) nowait reduction(+ : broke)
+    const double* __restrict x0 = xs_[0].data();
+    const double* __restrict x1 = xs_[1].data();
+    const double* __restrict x2 = xs_[D - 1].data();
+    double* __restrict F0 = sparse_.force[0].data();
+    double* __restrict F1 = sparse_.force[1].data();
+    double* __restrict F2 = sparse_.force[D - 1].data();
+#pragma omp for simd schedule(static) nowait reduction(+ : broke)
     for (long p = 0; p < m; ++p) {
       const std::size_t u = static_cast<std::size_t>(p);
       const std::size_t a = static_cast<std::size_t>(pi[u]), b = static_cast<std::size_t>(pj[u]);
-      const double d0 = xs_[0][a] - xs_[0][b], d1 = xs_[1][a] - xs_[1][b];
-      const double d2 = D == 3 ? xs_[D - 1][a] - xs_[D - 1][b] : 0.0;
+      const double d0 = x0[a] - x0[b], d1 = x1[a] - x1[b];
+      const double d2 = D == 3 ? x2[a] - x2[b] : 0.0;
       const double fr = bond_force_over_r<Real>(law, u, d0 * d0 + d1 * d1 + d2 * d2, alive[u] != 0, cut2, inv_rmin, broke);
-      sparse_.force[0][u] = fr * d0;
-      sparse_.force[1][u] = fr * d1;
-      if constexpr (D == 3) sparse_.force[D - 1][u] = fr * d2;
+      F0[u] = fr * d0;
+      F1[u] = fr * d1;
+      if constexpr (D == 3) F2[u] = fr * d2;
+    }
+  }
+
+  // f_i += sum over offsets of F[o + i] - F[i], then the sparse bonds of i, each particle in a fixed order
+  // (bitwise the same for any partition into threads). One pass over f in blocks: the offsets' terms are
+  // summed in a small buffer first, so f is read and written once however many offsets there are.
+  void assemble(double* f) const {
+    constexpr long block = 256;
+    const long n = static_cast<long>(n_);
+    const long nblocks = (n + block - 1) / block;
+    const int* __restrict off = sparse_.offset.data();
+    const int* __restrict entry = sparse_.entry.data();
+    const bool any_sparse = sparse_.size() > 0;
+#pragma omp for schedule(static)
+    for (long blk = 0; blk < nblocks; ++blk) {
+      const std::size_t b0 = static_cast<std::size_t>(blk * block);
+      const std::size_t len = static_cast<std::size_t>(std::min(block, n - blk * block));
+      alignas(64) double acc[D][block];
+      for (int c = 0; c < D; ++c)
+        for (std::size_t k = 0; k < len; ++k) acc[c][k] = 0.0;
+      for (const Group& g : groups_) {
+        const std::size_t o = static_cast<std::size_t>(g.offset);
+        for (int c = 0; c < D; ++c) {
+          const double* __restrict F = g.F[c].data() + b0;
+          double* __restrict a = acc[c];
+#pragma omp simd
+          for (std::size_t k = 0; k < len; ++k) a[k] += F[o + k] - F[k];
+        }
+      }
+      if (any_sparse) {
+        for (std::size_t k = 0; k < len; ++k) {
+          const std::size_t i = b0 + k;
+          if (off[i] == off[i + 1]) continue;
+          double sum[D] = {};
+          for (int e = off[i]; e < off[i + 1]; ++e) {
+            const int en = entry[static_cast<std::size_t>(e)];
+            const double sign = 1.0 - 2.0 * (en & 1);  // j gets -F
+            const std::size_t p = static_cast<std::size_t>(en >> 1);
+            for (int c = 0; c < D; ++c) sum[c] += sign * sparse_.force[c][p];
+          }
+          for (int c = 0; c < D; ++c) acc[c][k] += sum[c];
+        }
+      }
+      double* __restrict fb = f + b0 * D;
+      for (std::size_t k = 0; k < len; ++k)
+        for (int c = 0; c < D; ++c) fb[k * D + static_cast<std::size_t>(c)] += acc[c][k];
     }
   }
 
