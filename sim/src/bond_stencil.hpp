@@ -8,6 +8,7 @@
 #pragma once
 
 #include "pair_kernels.hpp"
+#include "parallel.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -92,8 +93,7 @@ class BondStencil {
   long add_forces(const double* x, double* f, const Law& law, double cut2, double inv_rmin) {
     const long n = static_cast<long>(n_);
     long broke = 0;  // shared: the sweeps reduce into it
-#pragma omp parallel
-    {
+    detail::parallel_region([&] {
 #pragma omp for schedule(static)
       for (long p = 0; p < n; ++p)
         for (int c = 0; c < D; ++c) xs_[c][static_cast<std::size_t>(p)] = x[static_cast<std::size_t>(p) * D + c];
@@ -111,7 +111,7 @@ class BondStencil {
       }
 #pragma omp barrier
       assemble(f);
-    }
+    });
     return broke;
   }
 

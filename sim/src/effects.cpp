@@ -1,6 +1,8 @@
 // The effects besides the pair law. Each is attached only when the scene declares it.
 #include "pmfrag/effects.hpp"
 
+#include "parallel.hpp"
+
 #include <cmath>
 
 namespace pmfrag {
@@ -74,8 +76,10 @@ class Gravity final : public Effect<D> {
   unsigned stages() const override { return stage::force | stage::observe; }
   void add_forces(State<D>& s) override {
     const long n = static_cast<long>(s.size());
-#pragma omp parallel for schedule(static)
-    for (long k = 0; k < n; ++k) s.f[static_cast<std::size_t>(k)] += s.mass[static_cast<std::size_t>(k)] * g_;
+    detail::parallel_region([&] {
+#pragma omp for schedule(static)
+      for (long k = 0; k < n; ++k) s.f[static_cast<std::size_t>(k)] += s.mass[static_cast<std::size_t>(k)] * g_;
+    });
   }
   void observe(const State<D>& s, Observables& o) const override {
     double pe = 0.0;  // -m g . x
@@ -96,9 +100,11 @@ class Damping final : public Effect<D> {
   unsigned stages() const override { return stage::force; }
   void add_forces(State<D>& s) override {
     const long n = static_cast<long>(s.size());
-#pragma omp parallel for schedule(static)
-    for (long k = 0; k < n; ++k)
-      s.f[static_cast<std::size_t>(k)] -= gamma_ * s.mass[static_cast<std::size_t>(k)] * s.v[static_cast<std::size_t>(k)];
+    detail::parallel_region([&] {
+#pragma omp for schedule(static)
+      for (long k = 0; k < n; ++k)
+        s.f[static_cast<std::size_t>(k)] -= gamma_ * s.mass[static_cast<std::size_t>(k)] * s.v[static_cast<std::size_t>(k)];
+    });
   }
 
  private:
@@ -122,8 +128,10 @@ class GreenspanAlpha final : public Effect<D> {
   unsigned stages() const override { return stage::force; }
   void add_forces(State<D>& s) override {
     const long n = static_cast<long>(s.size());
-#pragma omp parallel for schedule(static)
-    for (long k = 0; k < n; ++k) s.f[static_cast<std::size_t>(k)] *= alpha_[static_cast<std::size_t>(k)];
+    detail::parallel_region([&] {
+#pragma omp for schedule(static)
+      for (long k = 0; k < n; ++k) s.f[static_cast<std::size_t>(k)] *= alpha_[static_cast<std::size_t>(k)];
+    });
   }
 
  private:

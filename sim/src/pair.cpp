@@ -156,14 +156,17 @@ class PairEffect final : public Effect<D> {
     };
     if (spec_.model == PairModel::bonded) {
       const long nb = static_cast<long>(bi_.size());
-#pragma omp parallel for schedule(static) reduction(min : c2[:nl])
-      for (long b = 0; b < nb; ++b) {
-        const std::size_t u = static_cast<std::size_t>(b);
-        if (alive_[u]) c2[blaw_[u]] = std::min(c2[blaw_[u]], r2_of(bi_[u], bj_[u]));
-      }
+      detail::parallel_region([&] {
+#pragma omp for schedule(static) reduction(min : c2[:nl])
+        for (long b = 0; b < nb; ++b) {
+          const std::size_t u = static_cast<std::size_t>(b);
+          if (alive_[u]) c2[blaw_[u]] = std::min(c2[blaw_[u]], r2_of(bi_[u], bj_[u]));
+        }
+      });
     }
     const long np = static_cast<long>(list_.size());
-#pragma omp parallel for schedule(static) reduction(min : c2[:nl])
+    detail::parallel_region([&] {
+#pragma omp for schedule(static) reduction(min : c2[:nl])
     for (long p = 0; p < np; ++p) {
       const std::size_t u = static_cast<std::size_t>(p);
       const int l = list_.law[u];
@@ -172,6 +175,7 @@ class PairEffect final : public Effect<D> {
                                                                          contact_reach_[static_cast<std::size_t>(l)];
       if (r2 < reach) c2[l] = std::min(c2[l], r2);
     }
+    });
     double limit = std::numeric_limits<double>::infinity();
     for (std::size_t l = 0; l < laws_.size(); ++l) {
       if (!std::isfinite(close2[l])) continue;
@@ -206,8 +210,7 @@ class PairEffect final : public Effect<D> {
     double* __restrict f1 = list_.force[1].data();
     double* __restrict f2 = list_.force[D - 1].data();
     double* f = s.f.front().data();
-#pragma omp parallel
-    {
+    detail::parallel_region([&] {
 #pragma omp for simd schedule(static)
       for (long p = 0; p < m; ++p) {
         const std::size_t u = static_cast<std::size_t>(p);
@@ -226,7 +229,7 @@ class PairEffect final : public Effect<D> {
         if constexpr (D == 3) f2[u] = fr * d2;
       }
       list_.gather(f);
-    }
+    });
   }
 
   void retire_broken(const State<D>& s) {
