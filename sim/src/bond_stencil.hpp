@@ -7,6 +7,7 @@
 // Every particle's sum has a fixed order, so forces are bitwise the same for any thread count.
 #pragma once
 
+#include "bond_sweep_avx512.hpp"
 #include "pair_kernels.hpp"
 #include "parallel.hpp"
 
@@ -135,6 +136,18 @@ class BondStencil {
     double* __restrict F0 = g.F[0].data() + o;
     double* __restrict F1 = g.F[1].data() + o;
     double* __restrict F2 = g.F[D - 1].data() + o;
+#ifdef PMFRAG_HAVE_AVX512_SWEEP
+    if constexpr (std::is_same_v<Real, double> && is_fixed_law<Law>::value) {
+      constexpr long chunk = 64;  // threads split the range in multiples of the vector width
+      const long nchunks = (m + chunk - 1) / chunk;
+#pragma omp for schedule(static) nowait reduction(+ : broke)
+      for (long c = 0; c < nchunks; ++c) {
+        const std::size_t b = static_cast<std::size_t>(c * chunk), e = static_cast<std::size_t>(std::min(m, (c + 1) * chunk));
+        broke += sweep_fixed_avx512<D, Law::p, Law::q>(x0, x1, x2, o, alive, F0, F1, F2, b, e, law.G, law.H, cut2, inv_rmin);
+      }
+      return;
+    }
+#endif
 #pragma omp for simd schedule(static) nowait reduction(+ : broke)
     for (long p = 0; p < m; ++p) {
       const std::size_t i = static_cast<std::size_t>(p);

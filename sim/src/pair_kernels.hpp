@@ -39,6 +39,7 @@ inline T ipow_t(T x, int n) {
 /// precision knob). `with_ids` binds the per-pair law index array of a loop.
 template <int P, int Q>
 struct FixedLaw {
+  static constexpr int p = P, q = Q;
   double G, H;
   template <class T = double>
   T magnitude(std::size_t, T ie) const {
@@ -46,6 +47,11 @@ struct FixedLaw {
   }
   FixedLaw with_ids(const int*) const { return *this; }
 };
+template <class Law>
+struct is_fixed_law : std::false_type {};
+template <int P, int Q>
+struct is_fixed_law<FixedLaw<P, Q>> : std::true_type {};
+
 struct OneLaw {
   PairLaw law;
   template <class T = double>

@@ -1,0 +1,77 @@
+// Eight bonds at a time with AVX-512, for the paper's compile-time (p,q) laws. The scalar sweep spends most
+// of its time in one square root and one division per bond (both on the divider, ~2 ns per bond); here 1/r
+// comes from the hardware estimate (rsqrt14, relative error < 2^-14) refined by two Newton steps
+// y <- y (3/2 - r^2 y^2 / 2), which reach double precision (error ~2^-52, against the correctly rounded
+// 1/sqrt). Every bond, including the last partial vector of a thread's range, goes through the same masked
+// vector arithmetic, so the result does not depend on how the range is split among threads.
+#pragma once
+
+#if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__)
+#define PMFRAG_HAVE_AVX512_SWEEP 1
+// GCC 12 reports its own intrinsics' placeholder operands (_mm512_undefined_*) as maybe uninitialized.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include <immintrin.h>
+
+#include <cstddef>
+#include <cstdint>
+
+namespace pmfrag::detail {
+
+template <int N>
+inline __m512d pw8(__m512d x) {
+  if constexpr (N == 0) {
+    return _mm512_set1_pd(1.0);
+  } else if constexpr (N == 1) {
+    return x;
+  } else if constexpr (N % 2 == 0) {
+    const __m512d h = pw8<N / 2>(x);
+    return _mm512_mul_pd(h, h);
+  } else {
+    return _mm512_mul_pd(x, pw8<N - 1>(x));
+  }
+}
+
+/// Bonds (i, i + o) for i in [begin, end) of one offset: F[i] = F(r)/r (x_i - x_{i+o}) (zero for bonds gone
+/// or longer than sqrt(cut2)); returns the number of intact bonds found longer than sqrt(cut2).
+template <int D, int P, int Q>
+inline long sweep_fixed_avx512(const double* __restrict x0, const double* __restrict x1, const double* __restrict x2,
+                               std::size_t o, const std::uint8_t* __restrict alive, double* __restrict F0,
+                               double* __restrict F1, double* __restrict F2, std::size_t begin, std::size_t end,
+                               double G, double H, double cut2, double inv_rmin) {
+  const __m512d vG = _mm512_set1_pd(G), vH = _mm512_set1_pd(H), vcut2 = _mm512_set1_pd(cut2);
+  const __m512d vrmin = _mm512_set1_pd(inv_rmin), half = _mm512_set1_pd(0.5), three_halves = _mm512_set1_pd(1.5);
+  long broke = 0;
+  for (std::size_t i = begin; i < end; i += 8) {
+    const std::size_t left = end - i;
+    const __mmask8 lanes = left >= 8 ? __mmask8(0xff) : __mmask8((1u << left) - 1u);
+    const __m512d d0 = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, x0 + i), _mm512_maskz_loadu_pd(lanes, x0 + i + o));
+    const __m512d d1 = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, x1 + i), _mm512_maskz_loadu_pd(lanes, x1 + i + o));
+    __m512d r2 = _mm512_fmadd_pd(d1, d1, _mm512_mul_pd(d0, d0));
+    __m512d d2 = _mm512_setzero_pd();
+    if constexpr (D == 3) {
+      d2 = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, x2 + i), _mm512_maskz_loadu_pd(lanes, x2 + i + o));
+      r2 = _mm512_fmadd_pd(d2, d2, r2);
+    }
+    const __m128i a8 = _mm_maskz_loadu_epi8(lanes, alive + i);
+    const __mmask8 live = _mm512_test_epi64_mask(_mm512_cvtepu8_epi64(a8), _mm512_set1_epi64(0xff)) & lanes;
+    const __mmask8 within = _mm512_cmp_pd_mask(r2, vcut2, _CMP_LE_OQ);
+    broke += __builtin_popcount(static_cast<unsigned>(live & static_cast<__mmask8>(~within)));
+    const __m512d rr = _mm512_mask_blend_pd(live, vcut2, r2);  // no bond here: keep the arithmetic finite
+    const __m512d hr = _mm512_mul_pd(half, rr);
+    __m512d y = _mm512_rsqrt14_pd(rr);
+    y = _mm512_mul_pd(y, _mm512_fnmadd_pd(hr, _mm512_mul_pd(y, y), three_halves));
+    y = _mm512_mul_pd(y, _mm512_fnmadd_pd(hr, _mm512_mul_pd(y, y), three_halves));
+    const __m512d ie = _mm512_min_pd(y, vrmin);  // force held constant inside r_min (Sec. 4.2)
+    const __m512d mag = _mm512_fmsub_pd(vH, pw8<Q>(ie), _mm512_mul_pd(vG, pw8<P>(ie)));  // > 0 repulsive
+    const __m512d fr = _mm512_maskz_mov_pd(live & within, _mm512_mul_pd(mag, y));
+    _mm512_mask_storeu_pd(F0 + i, lanes, _mm512_mul_pd(fr, d0));
+    _mm512_mask_storeu_pd(F1 + i, lanes, _mm512_mul_pd(fr, d1));
+    if constexpr (D == 3) _mm512_mask_storeu_pd(F2 + i, lanes, _mm512_mul_pd(fr, d2));
+  }
+  return broke;
+}
+
+}  // namespace pmfrag::detail
+#pragma GCC diagnostic pop
+#endif
