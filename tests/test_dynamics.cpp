@@ -206,11 +206,14 @@ std::vector<double> final_state(const Scene& sc, int threads, long steps) {
 }  // namespace
 
 TEST(Dynamics, OneAndTwoThreadsAreBitwiseIdentical) {
+  set_min_particles_per_thread(1);  // really split these small scenes between two threads
   // The impact: the disc meets the plate at 3e-3 s and contact pairs form and part.
   const Scene impact = read_scene(test::case_path("impact.toml"));
   // The (3,5) plate under the cutoff reading: pairs form and break by the hundred after 3.5e-3 s.
   const Scene collapse = read_scene(test::case_path("slit_plate_3_5.toml"), {"pair.model=\"cutoff\""});
   for (const auto& [sc, steps] : {std::pair{impact, 40000L}, std::pair{collapse, 40000L}}) {
+    omp_set_num_threads(2);
+    ASSERT_EQ(step_threads(build_system(sc).size()), 2);
     const auto a = final_state(sc, 1, steps);
     const auto b = final_state(sc, 2, steps);
     ASSERT_EQ(a.size(), b.size());

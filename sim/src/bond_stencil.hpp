@@ -9,7 +9,9 @@
 
 #include "bond_sweep_avx512.hpp"
 #include "pair_kernels.hpp"
-#include "parallel.hpp"
+#include "team.hpp"
+
+#include <atomic>
 
 #include <algorithm>
 #include <cmath>
@@ -93,27 +95,32 @@ class BondStencil {
   template <class Law>
   long add_forces(const double* x, double* f, const Law& law, double cut2, double inv_rmin) {
     const long n = static_cast<long>(n_);
-    long broke = 0;  // shared: the sweeps reduce into it
-    detail::parallel_region([&] {
-#pragma omp for schedule(static)
-      for (long p = 0; p < n; ++p)
+    std::atomic<long> broke{0};
+    Team& team = Team::get(n_);
+    team.run([&](int tid) {
+      const int nt = team.size();
+      const auto [b, e] = particle_share(n, tid, nt);
+      for (long p = b; p < e; ++p)
         for (int c = 0; c < D; ++c) xs_[c][static_cast<std::size_t>(p)] = x[static_cast<std::size_t>(p) * D + c];
+      team.barrier();  // the sweeps read neighbours' positions
+      long mine = 0;
       for (auto& g : groups_) {
         if (single_)
-          sweep<float>(g, law.with_ids(g.law.data()), cut2, inv_rmin, broke);
+          sweep<float>(g, law.with_ids(g.law.data()), cut2, inv_rmin, mine, tid, nt);
         else
-          sweep<double>(g, law.with_ids(g.law.data()), cut2, inv_rmin, broke);
+          sweep<double>(g, law.with_ids(g.law.data()), cut2, inv_rmin, mine, tid, nt);
       }
       if (sparse_.size() > 0) {
         if (single_)
-          sparse_pass<float>(law.with_ids(sparse_.law.data()), cut2, inv_rmin, broke);
+          sparse_pass<float>(law.with_ids(sparse_.law.data()), cut2, inv_rmin, mine, tid, nt);
         else
-          sparse_pass<double>(law.with_ids(sparse_.law.data()), cut2, inv_rmin, broke);
+          sparse_pass<double>(law.with_ids(sparse_.law.data()), cut2, inv_rmin, mine, tid, nt);
       }
-#pragma omp barrier
-      assemble(f);
+      if (mine > 0) broke.fetch_add(mine, std::memory_order_relaxed);
+      team.barrier();  // assembly reads every thread's bond forces
+      assemble(f, tid, nt);
     });
-    return broke;
+    return broke.load();
   }
 
  private:
@@ -126,7 +133,7 @@ class BondStencil {
 
   // Evaluate one offset's bonds (inside a parallel region).
   template <class Real, class Law>
-  void sweep(Group& g, const Law law, double cut2, double inv_rmin, long& broke) {
+  void sweep(Group& g, const Law law, double cut2, double inv_rmin, long& broke, int tid, int nt) {
     const long m = static_cast<long>(n_) - g.offset;
     const std::size_t o = static_cast<std::size_t>(g.offset);
     const double* __restrict x0 = xs_[0].data();
@@ -138,18 +145,18 @@ class BondStencil {
     double* __restrict F2 = g.F[D - 1].data() + o;
 #ifdef PMFRAG_HAVE_AVX512_SWEEP
     if constexpr (std::is_same_v<Real, double> && is_fixed_law<Law>::value) {
-      constexpr long chunk = 64;  // threads split the range in multiples of the vector width
-      const long nchunks = (m + chunk - 1) / chunk;
-#pragma omp for schedule(static) nowait reduction(+ : broke)
-      for (long c = 0; c < nchunks; ++c) {
-        const std::size_t b = static_cast<std::size_t>(c * chunk), e = static_cast<std::size_t>(std::min(m, (c + 1) * chunk));
-        broke += sweep_fixed_avx512<D, Law::p, Law::q>(x0, x1, x2, o, alive, F0, F1, F2, b, e, law.G, law.H, cut2, inv_rmin);
-      }
+      // Bonds by their first particle, in this thread's particles: the assembly reads them from this core.
+      const auto [pb, pe] = particle_share(static_cast<long>(n_), tid, nt);
+      const long b = std::min(pb, m), e = std::min(pe, m);
+      broke += sweep_fixed_avx512<D, Law::p, Law::q>(x0, x1, x2, o, alive, F0, F1, F2, static_cast<std::size_t>(b),
+                                                     static_cast<std::size_t>(e), law.G, law.H, cut2, inv_rmin);
       return;
     }
 #endif
-#pragma omp for simd schedule(static) nowait reduction(+ : broke)
-    for (long p = 0; p < m; ++p) {
+    const auto [pb, pe] = particle_share(static_cast<long>(n_), tid, nt);
+    const long b = std::min(pb, m), e = std::min(pe, m);
+#pragma omp simd reduction(+ : broke)
+    for (long p = b; p < e; ++p) {
       const std::size_t i = static_cast<std::size_t>(p);
       const double d0 = x0[i] - x0[i + o], d1 = x1[i] - x1[i + o];
       const double d2 = D == 3 ? x2[i] - x2[i + o] : 0.0;
@@ -161,7 +168,7 @@ class BondStencil {
   }
 
   template <class Real, class Law>
-  void sparse_pass(const Law law, double cut2, double inv_rmin, long& broke) {
+  void sparse_pass(const Law law, double cut2, double inv_rmin, long& broke, int tid, int nt) {
     const long m = static_cast<long>(sparse_.size());
     const int* __restrict pi = sparse_.i.data();
     const int* __restrict pj = sparse_.j.data();
@@ -172,8 +179,9 @@ class BondStencil {
     double* __restrict F0 = sparse_.force[0].data();
     double* __restrict F1 = sparse_.force[1].data();
     double* __restrict F2 = sparse_.force[D - 1].data();
-#pragma omp for simd schedule(static) nowait reduction(+ : broke)
-    for (long p = 0; p < m; ++p) {
+    const auto [first, last] = share(m, tid, nt);
+#pragma omp simd reduction(+ : broke)
+    for (long p = first; p < last; ++p) {
       const std::size_t u = static_cast<std::size_t>(p);
       const std::size_t a = static_cast<std::size_t>(pi[u]), b = static_cast<std::size_t>(pj[u]);
       const double d0 = x0[a] - x0[b], d1 = x1[a] - x1[b];
@@ -188,15 +196,14 @@ class BondStencil {
   // f_i += sum over offsets of F[o + i] - F[i], then the sparse bonds of i, each particle in a fixed order
   // (bitwise the same for any partition into threads). One pass over f in blocks: the offsets' terms are
   // summed in a small buffer first, so f is read and written once however many offsets there are.
-  void assemble(double* f) const {
-    constexpr long block = 256;
+  void assemble(double* f, int tid, int nt) const {
+    constexpr long block = particle_grain;
     const long n = static_cast<long>(n_);
-    const long nblocks = (n + block - 1) / block;
     const int* __restrict off = sparse_.offset.data();
     const int* __restrict entry = sparse_.entry.data();
     const bool any_sparse = sparse_.size() > 0;
-#pragma omp for schedule(static)
-    for (long blk = 0; blk < nblocks; ++blk) {
+    const auto [pb, pe] = particle_share(n, tid, nt);  // whole blocks
+    for (long blk = pb / block; blk * block < pe; ++blk) {
       const std::size_t b0 = static_cast<std::size_t>(blk * block);
       const std::size_t len = static_cast<std::size_t>(std::min(block, n - blk * block));
       alignas(64) double acc[D][block];

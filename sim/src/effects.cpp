@@ -1,7 +1,7 @@
 // The effects besides the pair law. Each is attached only when the scene declares it.
 #include "pmfrag/effects.hpp"
 
-#include "parallel.hpp"
+#include "team.hpp"
 
 #include <cmath>
 
@@ -76,9 +76,10 @@ class Gravity final : public Effect<D> {
   unsigned stages() const override { return stage::force | stage::observe; }
   void add_forces(State<D>& s) override {
     const long n = static_cast<long>(s.size());
-    detail::parallel_region([&] {
-#pragma omp for schedule(static)
-      for (long k = 0; k < n; ++k) s.f[static_cast<std::size_t>(k)] += s.mass[static_cast<std::size_t>(k)] * g_;
+    detail::Team& team = detail::Team::get(s.size());
+    team.run([&](int tid) {
+      const auto [first, last] = detail::particle_share(n, tid, team.size());
+      for (long k = first; k < last; ++k) s.f[static_cast<std::size_t>(k)] += s.mass[static_cast<std::size_t>(k)] * g_;
     });
   }
   void observe(const State<D>& s, Observables& o) const override {
@@ -100,9 +101,10 @@ class Damping final : public Effect<D> {
   unsigned stages() const override { return stage::force; }
   void add_forces(State<D>& s) override {
     const long n = static_cast<long>(s.size());
-    detail::parallel_region([&] {
-#pragma omp for schedule(static)
-      for (long k = 0; k < n; ++k)
+    detail::Team& team = detail::Team::get(s.size());
+    team.run([&](int tid) {
+      const auto [first, last] = detail::particle_share(n, tid, team.size());
+      for (long k = first; k < last; ++k)
         s.f[static_cast<std::size_t>(k)] -= gamma_ * s.mass[static_cast<std::size_t>(k)] * s.v[static_cast<std::size_t>(k)];
     });
   }
@@ -128,9 +130,10 @@ class GreenspanAlpha final : public Effect<D> {
   unsigned stages() const override { return stage::force; }
   void add_forces(State<D>& s) override {
     const long n = static_cast<long>(s.size());
-    detail::parallel_region([&] {
-#pragma omp for schedule(static)
-      for (long k = 0; k < n; ++k) s.f[static_cast<std::size_t>(k)] *= alpha_[static_cast<std::size_t>(k)];
+    detail::Team& team = detail::Team::get(s.size());
+    team.run([&](int tid) {
+      const auto [first, last] = detail::particle_share(n, tid, team.size());
+      for (long k = first; k < last; ++k) s.f[static_cast<std::size_t>(k)] *= alpha_[static_cast<std::size_t>(k)];
     });
   }
 

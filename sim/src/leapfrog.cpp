@@ -1,6 +1,8 @@
 #include "pmfrag/leapfrog.hpp"
 
-#include "parallel.hpp"
+#include "team.hpp"
+
+#include <atomic>
 
 #include <algorithm>
 #include <cmath>
@@ -65,21 +67,24 @@ void Leapfrog<D>::step(double dt) {
   const double h = s_.step == 0 ? 0.5 * dt : 0.5 * (s_.dt + dt);  // == dt exactly for equal steps
   const double limit2 = 0.25 * s_.r0 * s_.r0;
   const double component_limit2 = limit2 / D;
-  const long m = n * D;
-  long bad = 0;
-  double max2 = 0.0;
   double* const xp = s_.x.front().data();
   double* const vp = s_.v.front().data();
   double* const fp = s_.f.front().data();
   const double* const mp = inv_mass_dof_.data();
-  detail::parallel_region([&] {
-    // Local restrict pointers: through the closure GCC would assume the stores may move them (gathers).
+  detail::Team& team = detail::Team::get(s_.size());
+  std::atomic<long> bad_total{0};
+  std::vector<double> max2_of(static_cast<std::size_t>(team.size()), 0.0);
+  team.run([&](int tid) {
     double* __restrict x = xp;
     double* __restrict v = vp;
     double* __restrict f = fp;
     const double* __restrict inv_mass = mp;
-#pragma omp for simd schedule(static) reduction(+ : bad) reduction(max : max2)
-    for (long j = 0; j < m; ++j) {
+    const auto [pb, pe] = detail::particle_share(n, tid, team.size());
+    const long b = pb * D, e = pe * D;
+    long bad = 0;
+    double max2 = 0.0;
+#pragma omp simd reduction(+ : bad) reduction(max : max2)
+    for (long j = b; j < e; ++j) {
       const double vj = v[j] + (h * inv_mass[j]) * f[j];
       const double dx = dt * vj;
       v[j] = vj;
@@ -89,7 +94,11 @@ void Leapfrog<D>::step(double dt) {
       bad += !(d2 <= component_limit2);
       max2 = std::max(max2, d2);
     }
+    if (bad > 0) bad_total.fetch_add(bad, std::memory_order_relaxed);
+    max2_of[static_cast<std::size_t>(tid)] = max2;
   });
+  const long bad = bad_total.load();
+  const double max2 = *std::max_element(max2_of.begin(), max2_of.end());
   if (bad > 0) {
     for (long k = 0; k < n; ++k) {
       const std::size_t i = static_cast<std::size_t>(k);

@@ -143,7 +143,6 @@ class PairEffect final : public Effect<D> {
   // pair is pressed below r0 and is constant (zero) inside r_min, and for stretched pairs it is largest at
   // r0, so each law's closest distance is clamped to [r_min, r_eq]. One extra pass over the pairs per step.
   double step_limit(const State<D>& s) const override {
-    const int nl = static_cast<int>(laws_.size());
     std::vector<double> close2(laws_.size(), std::numeric_limits<double>::infinity());
     double* c2 = close2.data();
     const double* x = s.x.front().data();
@@ -156,17 +155,12 @@ class PairEffect final : public Effect<D> {
     };
     if (spec_.model == PairModel::bonded) {
       const long nb = static_cast<long>(bi_.size());
-      detail::parallel_region([&] {
-#pragma omp for schedule(static) reduction(min : c2[:nl])
-        for (long b = 0; b < nb; ++b) {
-          const std::size_t u = static_cast<std::size_t>(b);
-          if (alive_[u]) c2[blaw_[u]] = std::min(c2[blaw_[u]], r2_of(bi_[u], bj_[u]));
-        }
-      });
+      for (long b = 0; b < nb; ++b) {
+        const std::size_t u = static_cast<std::size_t>(b);
+        if (alive_[u]) c2[blaw_[u]] = std::min(c2[blaw_[u]], r2_of(bi_[u], bj_[u]));
+      }
     }
     const long np = static_cast<long>(list_.size());
-    detail::parallel_region([&] {
-#pragma omp for schedule(static) reduction(min : c2[:nl])
     for (long p = 0; p < np; ++p) {
       const std::size_t u = static_cast<std::size_t>(p);
       const int l = list_.law[u];
@@ -175,7 +169,6 @@ class PairEffect final : public Effect<D> {
                                                                          contact_reach_[static_cast<std::size_t>(l)];
       if (r2 < reach) c2[l] = std::min(c2[l], r2);
     }
-    });
     double limit = std::numeric_limits<double>::infinity();
     for (std::size_t l = 0; l < laws_.size(); ++l) {
       if (!std::isfinite(close2[l])) continue;
@@ -210,9 +203,11 @@ class PairEffect final : public Effect<D> {
     double* __restrict f1 = list_.force[1].data();
     double* __restrict f2 = list_.force[D - 1].data();
     double* f = s.f.front().data();
-    detail::parallel_region([&] {
-#pragma omp for simd schedule(static)
-      for (long p = 0; p < m; ++p) {
+    detail::Team& team = detail::Team::get(s.size());
+    team.run([&](int tid) {
+      const auto [first, last] = detail::share(m, tid, team.size());
+#pragma omp simd
+      for (long p = first; p < last; ++p) {
         const std::size_t u = static_cast<std::size_t>(p);
         const std::size_t a = static_cast<std::size_t>(pi[u]) * D, b = static_cast<std::size_t>(pj[u]) * D;
         const double d0 = x[a] - x[b], d1 = x[a + 1] - x[b + 1];
@@ -228,7 +223,8 @@ class PairEffect final : public Effect<D> {
         f1[u] = fr * d1;
         if constexpr (D == 3) f2[u] = fr * d2;
       }
-      list_.gather(f);
+      team.barrier();  // the gather reads every thread's pair forces
+      list_.gather(f, tid, team.size());
     });
   }
 

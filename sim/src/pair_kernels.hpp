@@ -3,6 +3,7 @@
 #pragma once
 
 #include "pmfrag/pair_law.hpp"
+#include "team.hpp"
 
 #include <Eigen/Core>
 
@@ -121,11 +122,11 @@ struct PairTable {
     for (std::size_t k = 0; k < n; ++k)
       if (offset[k + 1] > offset[k]) touched.push_back(static_cast<int>(k));
   }
-  /// f_k += sum of its pairs' forces. Call from inside a parallel region (orphaned omp for).
-  void gather(double* f) const {
+  /// f_k += sum of its pairs' forces: thread tid of nt does its share of the particles.
+  void gather(double* f, int tid, int nt) const {
     const long m = static_cast<long>(touched.size());
-#pragma omp for schedule(static)
-    for (long t = 0; t < m; ++t) {
+    const auto [first, last] = share(m, tid, nt);
+    for (long t = first; t < last; ++t) {
       const long k = touched[static_cast<std::size_t>(t)];
       double s[D] = {};
       for (int e = offset[static_cast<std::size_t>(k)]; e < offset[static_cast<std::size_t>(k) + 1]; ++e) {

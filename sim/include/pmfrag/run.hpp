@@ -44,6 +44,13 @@ struct UnstableStepError : std::runtime_error {
 
 RunResult run_scene(const Scene& scene, const RunOptions& options);
 
+/// The step kernels give each thread at least this many particles (default 8192, or the environment's
+/// PMFRAG_MIN_PARTICLES_PER_THREAD): below that, waiting for each other costs the threads more than they
+/// share (docs/performance.md). 1 splits any system among all threads (the 1-vs-2-threads tests use it).
+void set_min_particles_per_thread(std::size_t particles);
+/// How many threads the step kernels use for a system of this many particles under the current settings.
+int step_threads(std::size_t particles);
+
 /// Asks a running simulation to stop at the end of its current step, write a checkpoint and return
 /// (RunResult::interrupted). Async-signal-safe: call it from a SIGINT/SIGTERM handler.
 void request_stop() noexcept;

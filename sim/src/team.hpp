@@ -1,0 +1,86 @@
+// The threads that run the per-step kernels. A step of the paper's plate is ~20 us of work; libgomp's
+// barrier costs ~1.7 us on this VM (it always makes a futex syscall), and a step had six of them, so two
+// OpenMP threads ran slower than one. The team keeps its workers spinning between kernels (then sleeping,
+// if idle for long) and synchronizes with atomics (~0.2 us). Kernels split their loops with `share`, the
+// same static, contiguous partition every time, and each particle's sum has a fixed order: results are
+// bitwise the same for any number of threads.
+#pragma once
+
+#include <algorithm>
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <thread>
+#include <utility>
+#include <vector>
+
+namespace pmfrag::detail {
+
+class Team {
+ public:
+  /// The calling thread's team for a system of n particles: omp_get_max_threads() (`--threads`) threads,
+  /// but no more than one per `min_particles_per_thread()` particles; rebuilt when that number changes.
+  static Team& get(std::size_t particles);
+  /// 8192, or the environment's PMFRAG_MIN_PARTICLES_PER_THREAD. Below it a thread's share of a step is a
+  /// few microseconds and waiting for the other threads costs more than it saves: on the project's 2-core
+  /// VM the (7,14) plate (2698 particles) ran 1.3-1.9e8 particle-steps/s on one thread and ~1.2e8 on two,
+  /// the 3-D block (54,940) 3.1-3.7e7 on one and 6.3-6.7e7 on two.
+  static std::size_t min_particles_per_thread();
+  static int threads_for(std::size_t particles);
+
+  explicit Team(int threads);
+  ~Team();
+  Team(const Team&) = delete;
+  Team& operator=(const Team&) = delete;
+
+  int size() const { return size_; }
+
+  /// Runs body(tid) on every thread (the caller is tid 0); returns when all have finished.
+  template <class Body>
+  void run(Body&& body) {
+    if (size_ == 1) {
+      body(0);
+      return;
+    }
+    using B = std::remove_reference_t<Body>;
+    dispatch([](void* ctx, int tid) { (*static_cast<B*>(ctx))(tid); }, &body);
+  }
+
+  /// All threads of the team wait here until every one has arrived (call only inside `run`).
+  void barrier();
+
+ private:
+  using Fn = void (*)(void*, int);
+  void dispatch(Fn fn, void* ctx);
+  void work(int tid);
+
+  int size_ = 1;
+  std::vector<std::thread> workers_;
+  Fn fn_ = nullptr;
+  void* ctx_ = nullptr;
+  alignas(64) std::atomic<std::uint32_t> generation_{0};  ///< bumped to hand out a job (or to stop)
+  alignas(64) std::atomic<int> finished_{0};               ///< workers done with the current job
+  alignas(64) std::atomic<int> arrived_{0};                ///< barrier: threads arrived
+  alignas(64) std::atomic<std::uint32_t> passed_{0};       ///< barrier: generations passed
+  bool stop_ = false;
+};
+
+/// Thread tid's share [begin, end) of n items, in multiples of `grain` (except the last).
+inline std::pair<long, long> share(long n, int tid, int threads, long grain = 1) {
+  const long units = (n + grain - 1) / grain;
+  const long per = units / threads, extra = units % threads;
+  const long b = tid * per + std::min<long>(tid, extra);
+  const long e = b + per + (tid < extra ? 1 : 0);
+  return {std::min(n, b * grain), std::min(n, e * grain)};
+}
+
+/// Thread tid's particles [begin, end). Every per-particle kernel of a step uses this one partition, so
+/// each thread finds the positions, velocities and forces it touches in its own core's cache. 256 is the
+/// assembly block of the bond stencil and a multiple of every vector width.
+inline constexpr long particle_grain = 256;
+inline std::pair<long, long> particle_share(long n, int tid, int threads) {
+  return share(n, tid, threads, particle_grain);
+}
+
+}  // namespace pmfrag::detail
