@@ -31,10 +31,12 @@ pmfrag_rate() {  # pmfrag_rate SCENE MODEL THREADS STEPS DT -> particle-steps/s 
       --set "time.end=$(awk "BEGIN{print $4 * $5}")" --set output.every=1 > /dev/null
     sed -n 's/.*"particle_steps_per_s": *\([0-9.e+-]*\).*/\1/p' "$out/run.json" | awk '{printf "%.4g\n", $1}'
   done | median3
+  # how many threads the engine used (a thread gets at least 8192 particles unless the environment says less)
+  sed -n 's/.*"threads": *\([0-9]*\).*/\1/p' "$out/run.json" > "$work/used_threads"
 }
 
 echo "machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) cores; $(date -u +%F)"
-printf "%-28s %-7s %14s %14s %8s\n" scene threads pmfrag LAMMPS ratio
+printf "%-28s %-7s %14s %14s %8s  %s\n" scene threads pmfrag LAMMPS ratio "(pmfrag threads used)"
 for scene in slit_plate_7_14 block3d_slit; do
   steps=$steps2d; models="cutoff bonded"
   if [ $scene = block3d_slit ]; then steps=$steps3d; models="bonded"; fi
@@ -45,10 +47,15 @@ for scene in slit_plate_7_14 block3d_slit; do
     for t in 1 2; do
       ours=$(pmfrag_rate "cases/$scene.toml" "$model" "$t" "$steps" "$dt")
       theirs=$(lammps_rate "$work/lmp_$scene/$model.in" "$t")
-      printf "%-28s %-7s %14s %14s %8s\n" "$scene ($model)" "$t" "$ours" "$theirs" "$(awk "BEGIN{printf \"%.1fx\", $ours / $theirs}")"
+      printf "%-28s %-7s %14s %14s %8s  (%s)\n" "$scene ($model)" "$t" "$ours" "$theirs" \
+        "$(awk "BEGIN{printf \"%.1fx\", $ours / $theirs}")" "$(cat "$work/used_threads")"
     done
   done
 done
+
+# The plate split between two threads anyway (the engine would use one): what the synchronization costs.
+forced=$(PMFRAG_MIN_PARTICLES_PER_THREAD=1 pmfrag_rate cases/slit_plate_7_14.toml bonded 2 "$steps2d" 1e-7)
+echo "slit plate (bonded) forced onto 2 threads: $forced particle-steps/s (used $(cat "$work/used_threads"))"
 
 # Only what a scene declares is computed: the plate with pair + kinematic, and with every effect declared.
 effects_rate() {

@@ -198,6 +198,7 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
        << ",\n  \"dt_adaptive\": " << (adaptive ? "true" : "false") << ",\n  \"dt_min_s\": " << fmt("%.10g", res.dt_min)
        << ",\n  \"dt_limit_s\": " << fmt("%.10g", limit) << ",\n  \"wall_s\": " << fmt("%.6g", res.wall_s)
        << ",\n  \"particle_steps_per_s\": " << fmt("%.6g", res.particle_steps_per_s())
+       << ",\n  \"threads\": " << step_threads(res.particles)
        << ",\n  \"first_break_time_s\": " << fmt("%.10g", res.first_break_time) << "\n}\n";
   }
   fs::rename(tmp, dir / "run.json");
