@@ -9,8 +9,10 @@
 #if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__)
 #define PMFRAG_HAVE_AVX512_SWEEP 1
 // GCC 12 reports its own intrinsics' placeholder operands (_mm512_undefined_*) as maybe uninitialized.
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 #include <immintrin.h>
 
 #include <cstddef>
@@ -73,5 +75,7 @@ inline long sweep_fixed_avx512(const double* __restrict x0, const double* __rest
 }
 
 }  // namespace pmfrag::detail
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic pop
+#endif
 #endif
