@@ -15,24 +15,12 @@
 #endif
 #include <immintrin.h>
 
+#include "pair_kernels.hpp"  // pw<N>: GCC vector types multiply with *
+
 #include <cstddef>
 #include <cstdint>
 
 namespace pmfrag::detail {
-
-template <int N>
-inline __m512d pw8(__m512d x) {
-  if constexpr (N == 0) {
-    return _mm512_set1_pd(1.0);
-  } else if constexpr (N == 1) {
-    return x;
-  } else if constexpr (N % 2 == 0) {
-    const __m512d h = pw8<N / 2>(x);
-    return _mm512_mul_pd(h, h);
-  } else {
-    return _mm512_mul_pd(x, pw8<N - 1>(x));
-  }
-}
 
 /// Bonds (i, i + o) for i in [begin, end) of one offset: F[i] = F(r)/r (x_i - x_{i+o}) (zero for bonds gone
 /// or longer than sqrt(cut2)); returns the number of intact bonds found longer than sqrt(cut2).
@@ -65,7 +53,7 @@ inline long sweep_fixed_avx512(const double* __restrict x0, const double* __rest
     y = _mm512_mul_pd(y, _mm512_fnmadd_pd(hr, _mm512_mul_pd(y, y), three_halves));
     y = _mm512_mul_pd(y, _mm512_fnmadd_pd(hr, _mm512_mul_pd(y, y), three_halves));
     const __m512d ie = _mm512_min_pd(y, vrmin);  // force held constant inside r_min (Sec. 4.2)
-    const __m512d mag = _mm512_fmsub_pd(vH, pw8<Q>(ie), _mm512_mul_pd(vG, pw8<P>(ie)));  // > 0 repulsive
+    const __m512d mag = _mm512_fmsub_pd(vH, pw<Q>(ie), _mm512_mul_pd(vG, pw<P>(ie)));  // > 0 repulsive
     const __m512d fr = _mm512_maskz_mov_pd(live & within, _mm512_mul_pd(mag, y));
     _mm512_mask_storeu_pd(F0 + i, lanes, _mm512_mul_pd(fr, d0));
     _mm512_mask_storeu_pd(F1 + i, lanes, _mm512_mul_pd(fr, d1));
