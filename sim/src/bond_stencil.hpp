@@ -11,9 +11,8 @@
 #include "pair_kernels.hpp"
 #include "team.hpp"
 
-#include <atomic>
-
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <map>
 
@@ -143,18 +142,16 @@ class BondStencil {
     double* __restrict F0 = g.F[0].data() + o;
     double* __restrict F1 = g.F[1].data() + o;
     double* __restrict F2 = g.F[D - 1].data() + o;
+    // Bonds by their first particle, in this thread's particles: the assembly reads them from this core.
+    const auto [pb, pe] = particle_share(static_cast<long>(n_), tid, nt);
+    const long b = std::min(pb, m), e = std::min(pe, m);
 #ifdef PMFRAG_HAVE_AVX512_SWEEP
     if constexpr (std::is_same_v<Real, double> && is_fixed_law<Law>::value) {
-      // Bonds by their first particle, in this thread's particles: the assembly reads them from this core.
-      const auto [pb, pe] = particle_share(static_cast<long>(n_), tid, nt);
-      const long b = std::min(pb, m), e = std::min(pe, m);
       broke += sweep_fixed_avx512<D, Law::p, Law::q>(x0, x1, x2, o, alive, F0, F1, F2, static_cast<std::size_t>(b),
                                                      static_cast<std::size_t>(e), law.G, law.H, cut2, inv_rmin);
       return;
     }
 #endif
-    const auto [pb, pe] = particle_share(static_cast<long>(n_), tid, nt);
-    const long b = std::min(pb, m), e = std::min(pe, m);
 #pragma omp simd reduction(+ : broke)
     for (long p = b; p < e; ++p) {
       const std::size_t i = static_cast<std::size_t>(p);
@@ -200,7 +197,6 @@ class BondStencil {
     constexpr long block = particle_grain;
     const long n = static_cast<long>(n_);
     const int* __restrict off = sparse_.offset.data();
-    const int* __restrict entry = sparse_.entry.data();
     const bool any_sparse = sparse_.size() > 0;
     const auto [pb, pe] = particle_share(n, tid, nt);  // whole blocks
     for (long blk = pb / block; blk * block < pe; ++blk) {
@@ -220,15 +216,9 @@ class BondStencil {
       }
       if (any_sparse) {
         for (std::size_t k = 0; k < len; ++k) {
-          const std::size_t i = b0 + k;
-          if (off[i] == off[i + 1]) continue;
-          double sum[D] = {};
-          for (int e = off[i]; e < off[i + 1]; ++e) {
-            const int en = entry[static_cast<std::size_t>(e)];
-            const double sign = 1.0 - 2.0 * (en & 1);  // j gets -F
-            const std::size_t p = static_cast<std::size_t>(en >> 1);
-            for (int c = 0; c < D; ++c) sum[c] += sign * sparse_.force[c][p];
-          }
+          if (off[b0 + k] == off[b0 + k + 1]) continue;
+          double sum[D];
+          sparse_.sum_of(b0 + k, sum);
           for (int c = 0; c < D; ++c) acc[c][k] += sum[c];
         }
       }

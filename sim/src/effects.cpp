@@ -75,10 +75,7 @@ class Gravity final : public Effect<D> {
   std::string name() const override { return "gravity"; }
   unsigned stages() const override { return stage::force | stage::observe; }
   void add_forces(State<D>& s) override {
-    const long n = static_cast<long>(s.size());
-    detail::Team& team = detail::Team::get(s.size());
-    team.run([&](int tid) {
-      const auto [first, last] = detail::particle_share(n, tid, team.size());
+    detail::for_particles(s.size(), [&](long first, long last, int) {
       for (long k = first; k < last; ++k) s.f[static_cast<std::size_t>(k)] += s.mass[static_cast<std::size_t>(k)] * g_;
     });
   }
@@ -100,10 +97,7 @@ class Damping final : public Effect<D> {
   std::string name() const override { return "damping"; }
   unsigned stages() const override { return stage::force; }
   void add_forces(State<D>& s) override {
-    const long n = static_cast<long>(s.size());
-    detail::Team& team = detail::Team::get(s.size());
-    team.run([&](int tid) {
-      const auto [first, last] = detail::particle_share(n, tid, team.size());
+    detail::for_particles(s.size(), [&](long first, long last, int) {
       for (long k = first; k < last; ++k)
         s.f[static_cast<std::size_t>(k)] -= gamma_ * s.mass[static_cast<std::size_t>(k)] * s.v[static_cast<std::size_t>(k)];
     });
@@ -129,10 +123,7 @@ class GreenspanAlpha final : public Effect<D> {
   std::string name() const override { return "greenspan_alpha"; }
   unsigned stages() const override { return stage::force; }
   void add_forces(State<D>& s) override {
-    const long n = static_cast<long>(s.size());
-    detail::Team& team = detail::Team::get(s.size());
-    team.run([&](int tid) {
-      const auto [first, last] = detail::particle_share(n, tid, team.size());
+    detail::for_particles(s.size(), [&](long first, long last, int) {
       for (long k = first; k < last; ++k) s.f[static_cast<std::size_t>(k)] *= alpha_[static_cast<std::size_t>(k)];
     });
   }

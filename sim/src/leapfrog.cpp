@@ -2,9 +2,8 @@
 
 #include "team.hpp"
 
-#include <atomic>
-
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -71,16 +70,14 @@ void Leapfrog<D>::step(double dt) {
   double* const vp = s_.v.front().data();
   double* const fp = s_.f.front().data();
   const double* const mp = inv_mass_dof_.data();
-  detail::Team& team = detail::Team::get(s_.size());
   std::atomic<long> bad_total{0};
-  std::vector<double> max2_of(static_cast<std::size_t>(team.size()), 0.0);
-  team.run([&](int tid) {
+  max2_of_.assign(static_cast<std::size_t>(detail::Team::get(s_.size()).size()), 0.0);
+  detail::for_particles(s_.size(), [&](long first, long last, int tid) {
     double* __restrict x = xp;
     double* __restrict v = vp;
     double* __restrict f = fp;
     const double* __restrict inv_mass = mp;
-    const auto [pb, pe] = detail::particle_share(n, tid, team.size());
-    const long b = pb * D, e = pe * D;
+    const long b = first * D, e = last * D;
     long bad = 0;
     double max2 = 0.0;
 #pragma omp simd reduction(+ : bad) reduction(max : max2)
@@ -95,10 +92,10 @@ void Leapfrog<D>::step(double dt) {
       max2 = std::max(max2, d2);
     }
     if (bad > 0) bad_total.fetch_add(bad, std::memory_order_relaxed);
-    max2_of[static_cast<std::size_t>(tid)] = max2;
+    max2_of_[static_cast<std::size_t>(tid)] = max2;
   });
   const long bad = bad_total.load();
-  const double max2 = *std::max_element(max2_of.begin(), max2_of.end());
+  const double max2 = *std::max_element(max2_of_.begin(), max2_of_.end());
   if (bad > 0) {
     for (long k = 0; k < n; ++k) {
       const std::size_t i = static_cast<std::size_t>(k);

@@ -122,20 +122,25 @@ struct PairTable {
     for (std::size_t k = 0; k < n; ++k)
       if (offset[k + 1] > offset[k]) touched.push_back(static_cast<int>(k));
   }
+  /// s = the sum of particle k's pair forces, in its fixed (ascending pair) order.
+  void sum_of(std::size_t k, double (&s)[D]) const {
+    for (int c = 0; c < D; ++c) s[c] = 0.0;
+    for (int e = offset[k]; e < offset[k + 1]; ++e) {
+      const int en = entry[static_cast<std::size_t>(e)];
+      const double sign = 1.0 - 2.0 * (en & 1);  // j gets -F
+      const std::size_t p = static_cast<std::size_t>(en >> 1);
+      for (int c = 0; c < D; ++c) s[c] += sign * force[c][p];
+    }
+  }
   /// f_k += sum of its pairs' forces: thread tid of nt does its share of the particles.
   void gather(double* f, int tid, int nt) const {
     const long m = static_cast<long>(touched.size());
     const auto [first, last] = share(m, tid, nt);
     for (long t = first; t < last; ++t) {
-      const long k = touched[static_cast<std::size_t>(t)];
-      double s[D] = {};
-      for (int e = offset[static_cast<std::size_t>(k)]; e < offset[static_cast<std::size_t>(k) + 1]; ++e) {
-        const int en = entry[static_cast<std::size_t>(e)];
-        const double sign = 1.0 - 2.0 * (en & 1);  // j gets -F
-        const std::size_t p = static_cast<std::size_t>(en >> 1);
-        for (int c = 0; c < D; ++c) s[c] += sign * force[c][p];
-      }
-      for (int c = 0; c < D; ++c) f[static_cast<std::size_t>(k) * D + c] += s[c];
+      const std::size_t k = static_cast<std::size_t>(touched[static_cast<std::size_t>(t)]);
+      double s[D];
+      sum_of(k, s);
+      for (int c = 0; c < D; ++c) f[k * D + static_cast<std::size_t>(c)] += s[c];
     }
   }
 };

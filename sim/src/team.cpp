@@ -29,9 +29,7 @@ void spin_until(Done&& done) {
       std::this_thread::yield();
   }
 }
-}  // namespace
 
-namespace {
 std::atomic<std::size_t>& min_particles_setting() {
   static std::atomic<std::size_t> m{[] {
     const char* env = std::getenv("PMFRAG_MIN_PARTICLES_PER_THREAD");
@@ -43,15 +41,6 @@ std::atomic<std::size_t>& min_particles_setting() {
 }  // namespace
 
 std::size_t Team::min_particles_per_thread() { return min_particles_setting().load(std::memory_order_relaxed); }
-
-}  // namespace pmfrag::detail
-
-namespace pmfrag {
-void set_min_particles_per_thread(std::size_t n) { detail::min_particles_setting().store(std::max<std::size_t>(1, n)); }
-int step_threads(std::size_t particles) { return detail::Team::threads_for(particles); }
-}  // namespace pmfrag
-
-namespace pmfrag::detail {
 
 int Team::threads_for(std::size_t particles) {
   const std::size_t fit = std::max<std::size_t>(1, particles / min_particles_per_thread());
@@ -118,3 +107,8 @@ void Team::barrier() {
 }
 
 }  // namespace pmfrag::detail
+
+namespace pmfrag {
+void set_min_particles_per_thread(std::size_t n) { detail::min_particles_setting().store(std::max<std::size_t>(1, n)); }
+int step_threads(std::size_t particles) { return detail::Team::threads_for(particles); }
+}  // namespace pmfrag

@@ -83,4 +83,14 @@ inline std::pair<long, long> particle_share(long n, int tid, int threads) {
   return share(n, tid, threads, particle_grain);
 }
 
+/// body(first, last, tid) on every thread of the team for n particles, each with its particle_share.
+template <class Body>
+inline void for_particles(std::size_t n, Body&& body) {
+  Team& team = Team::get(n);
+  team.run([&](int tid) {
+    const auto [first, last] = particle_share(static_cast<long>(n), tid, team.size());
+    body(first, last, tid);
+  });
+}
+
 }  // namespace pmfrag::detail
