@@ -1,12 +1,17 @@
 // Bond forces on a lattice, evaluated as stencil sweeps. Particles of a lattice body are numbered row by
 // row, so most bonds (i, j) share one of a few index offsets o = j - i (Greenspan's plate: 1, 40, 41). For
-// each common offset, one contiguous, vectorized sweep over i evaluates every bond (i, i + o) once and
-// stores its force at F[o + i] in an array padded with o zeros at each end; particle i then receives
-// F[o + i] - F[i] from that offset: no gathers, no scatters, each bond evaluated once. Bonds off the
-// common offsets (around holes and slits, between bodies) go through a pair table and a gather.
-// Every particle's sum has a fixed order, so forces are bitwise the same for any thread count.
+// each common offset, one contiguous, vectorized sweep over i evaluates every bond (i, i + o) and stores its
+// force on i at F[i]; particle i then receives F[i] - F[i - o] from that offset: no gathers, no scatters.
+// Bonds off the common offsets (around holes and slits, between bodies) go through a pair table and a gather.
+//
+// Sweep and assembly run together, one block of 256 particles at a time: a block's bond forces are summed
+// into f while they are still in L1. Each thread keeps the bond forces of its own particles, and evaluates
+// the few bonds (i - o, i) reaching back into the previous thread's particles itself (the same arithmetic,
+// so the same bits), so no thread waits for another between the sweep and the assembly. Every particle's
+// sum has a fixed order: forces are bitwise the same for any thread count.
 #pragma once
 
+#include "aligned.hpp"
 #include "bond_sweep_avx512.hpp"
 #include "pair_kernels.hpp"
 #include "team.hpp"
@@ -48,18 +53,20 @@ class BondStencil {
     for (std::size_t b = 0; b < bi.size(); ++b) ++count[bj[b] - bi[b]];
     std::map<int, int> group_of;
     for (auto [o, c] : count) {
-      // A sweep costs n - o evaluations: worth it when at least 40 % of them are bonds.
-      if (static_cast<std::size_t>(o) < n && c >= 8 && static_cast<double>(c) >= 0.4 * static_cast<double>(n - o)) {
+      // A sweep evaluates only the runs of consecutive i that have a bond, but the assembly visits every
+      // particle once per offset: an offset is worth it when it holds at least 5 % of its possible bonds.
+      if (static_cast<std::size_t>(o) < n && c >= 8 && static_cast<double>(c) >= 0.05 * static_cast<double>(n - o)) {
         group_of[o] = static_cast<int>(groups_.size());
         Group g;
         g.offset = o;
         g.alive.assign(n - o, 0);
         g.law.assign(n - o, 0);
-        for (auto& f : g.F) f.assign(n + o, 0.0);
         groups_.push_back(std::move(g));
+        reach_ = std::max(reach_, static_cast<long>(o));
       }
     }
     loc_.resize(bi.size());
+    std::vector<int> si, sj, sl;
     for (std::size_t b = 0; b < bi.size(); ++b) {
       const int o = bj[b] - bi[b];
       auto it = group_of.find(o);
@@ -69,12 +76,26 @@ class BondStencil {
         g.law[static_cast<std::size_t>(bi[b])] = blaw[b];
         loc_[b] = {it->second, bi[b]};
       } else {
-        loc_[b] = {-1, static_cast<int>(sparse_.size())};
-        sparse_.add(bi[b], bj[b], blaw[b]);
+        loc_[b] = {-1, static_cast<int>(si.size())};
+        si.push_back(bi[b]), sj.push_back(bj[b]), sl.push_back(blaw[b]);
         sparse_alive_.push_back(1);
       }
     }
-    sparse_.index(n);
+    sparse_i_ = std::move(si), sparse_j_ = std::move(sj), sparse_law_ = std::move(sl);
+    for (Group& g : groups_) {
+      // Runs [begin, end) of i with a bond; gaps shorter than a vector are swept through (no bond there:
+      // the force is zero).
+      const long m = static_cast<long>(g.alive.size());
+      for (long i = 0; i < m; ++i) {
+        if (!g.alive[static_cast<std::size_t>(i)]) continue;
+        if (!g.runs.empty() && i - g.runs.back().second < 8)
+          g.runs.back().second = i + 1;
+        else
+          g.runs.push_back({i, i + 1});
+      }
+    }
+    for (const Group& g : groups_) offsets_.push_back(static_cast<std::size_t>(g.offset));
+    reach_ = (reach_ + 7) / 8 * 8;  // keeps each thread's buffers 64-byte aligned like its particles
     for (auto& c : xs_) c.assign(n, 0.0);
   }
 
@@ -87,37 +108,26 @@ class BondStencil {
   }
 
   std::size_t sweeps() const { return groups_.size(); }
-  std::size_t sparse_bonds() const { return sparse_.size(); }
+  std::size_t sparse_bonds() const { return sparse_i_.size(); }
 
-  /// Adds bond forces to f (N x D, interleaved). Returns the number of intact bonds found longer than
-  /// sqrt(cut2): the caller retires them.
+  /// Adds bond forces to f (N x D, interleaved). Returns a positive number if some intact bond was found
+  /// longer than sqrt(cut2) (a bond near a thread boundary may be counted twice): the caller retires them.
   template <class Law>
   long add_forces(const double* x, double* f, const Law& law, double cut2, double inv_rmin) {
-    const long n = static_cast<long>(n_);
     std::atomic<long> broke{0};
     Team& team = Team::get(n_);
+    if (static_cast<int>(work_.size()) != team.size()) plan(team.size());
     team.run([&](int tid) {
-      const int nt = team.size();
-      const auto [b, e] = particle_share(n, tid, nt);
-      for (long p = b; p < e; ++p)
+      Work& w = work_[static_cast<std::size_t>(tid)];
+      for (long p = w.pb; p < w.pe; ++p)
         for (int c = 0; c < D; ++c) xs_[c][static_cast<std::size_t>(p)] = x[static_cast<std::size_t>(p) * D + c];
       team.barrier();  // the sweeps read neighbours' positions
       long mine = 0;
-      for (auto& g : groups_) {
-        if (single_)
-          sweep<float>(g, law.with_ids(g.law.data()), cut2, inv_rmin, mine, tid, nt);
-        else
-          sweep<double>(g, law.with_ids(g.law.data()), cut2, inv_rmin, mine, tid, nt);
-      }
-      if (sparse_.size() > 0) {
-        if (single_)
-          sparse_pass<float>(law.with_ids(sparse_.law.data()), cut2, inv_rmin, mine, tid, nt);
-        else
-          sparse_pass<double>(law.with_ids(sparse_.law.data()), cut2, inv_rmin, mine, tid, nt);
-      }
+      if (single_)
+        mine = forces_of<float>(w, law, cut2, inv_rmin, f);
+      else
+        mine = forces_of<double>(w, law, cut2, inv_rmin, f);
       if (mine > 0) broke.fetch_add(mine, std::memory_order_relaxed);
-      team.barrier();  // assembly reads every thread's bond forces
-      assemble(f, tid, nt);
     });
     return broke.load();
   }
@@ -127,58 +137,129 @@ class BondStencil {
     int offset = 0;
     std::vector<std::uint8_t> alive;  ///< bond (i, i + offset) exists and is intact
     std::vector<int> law;
-    std::vector<double> F[D];  ///< force on i of bond (i, i + offset) at F[offset + i]; zeros at both ends
+    std::vector<std::pair<long, long>> runs;  ///< [begin, end) of i holding the bonds, ascending
+  };
+  /// One thread's particles [pb, pe) and what it needs to sum their bond forces by itself.
+  struct Work {
+    long pb = 0, pe = 0, base = 0;  ///< the buffers hold bond i at [i - base], base = pb - reach
+    std::vector<double, AlignedAllocator<double>> F;  ///< per group and component (stride `stride`): force on
+                                                      ///< i of bond (i, i + offset)
+    std::size_t stride = 0;
+    double* F_of(std::size_t g, int c) { return F.data() + (g * D + static_cast<std::size_t>(c)) * stride; }
+    const double* F_of(std::size_t g, int c) const {
+      return F.data() + (g * D + static_cast<std::size_t>(c)) * stride;
+    }
+    PairTable<D> sparse;                 ///< off-stencil bonds touching [pb, pe), in ascending global order
+    std::vector<int> sparse_id;          ///< their index among all off-stencil bonds (for `alive`)
+    std::vector<std::uint8_t> sparse_alive;
   };
 
-  // Evaluate one offset's bonds (inside a parallel region).
+  // Each thread's share of particles, its sweep buffers (zeros where no bond is ever evaluated: before
+  // particle 0 and past n - offset) and its off-stencil bonds.
+  void plan(int threads) {
+    work_.assign(static_cast<std::size_t>(threads), Work{});
+    const long n = static_cast<long>(n_);
+    for (int t = 0; t < threads; ++t) {
+      Work& w = work_[static_cast<std::size_t>(t)];
+      std::tie(w.pb, w.pe) = particle_share(n, t, threads);
+      w.base = w.pb - reach_;
+      // 64-byte aligned rows whose stride is an odd number of cache lines, so the rows do not all fall
+      // into the same L1 sets
+      w.stride = (static_cast<std::size_t>(w.pe - w.base) + 7) / 8 * 8;
+      if ((w.stride / 8) % 2 == 0) w.stride += 8;
+      w.F.assign(groups_.size() * D * w.stride, 0.0);
+      for (std::size_t b = 0; b < sparse_i_.size(); ++b) {
+        const auto in = [&](int p) { return p >= w.pb && p < w.pe; };
+        if (in(sparse_i_[b]) || in(sparse_j_[b])) {
+          w.sparse.add(sparse_i_[b], sparse_j_[b], sparse_law_[b]);
+          w.sparse_id.push_back(static_cast<int>(b));
+        }
+      }
+      w.sparse.index(n_);
+      w.sparse_alive.resize(w.sparse_id.size());
+    }
+  }
+
+  // This thread's bond forces: off-stencil bonds first, then block by block every offset's sweep and the
+  // assembly into f.
   template <class Real, class Law>
-  void sweep(Group& g, const Law law, double cut2, double inv_rmin, long& broke, int tid, int nt) {
-    const long m = static_cast<long>(n_) - g.offset;
+  long forces_of(Work& w, const Law& law, double cut2, double inv_rmin, double* f) {
+    long broke = 0;
+    for (std::size_t u = 0; u < w.sparse_id.size(); ++u)
+      w.sparse_alive[u] = sparse_alive_[static_cast<std::size_t>(w.sparse_id[u])];
+    if (w.sparse.size() > 0) sparse_pass<Real>(w, law.with_ids(w.sparse.law.data()), cut2, inv_rmin, broke);
+    // The bonds (i, i + o) with i < pb whose second particle is ours.
+    for (std::size_t g = 0; g < groups_.size(); ++g)
+      sweep_runs<Real>(w, g, law.with_ids(groups_[g].law.data()), cut2, inv_rmin, broke,
+                       std::max(0L, w.pb - groups_[g].offset), w.pb);
+    std::size_t next_touched = 0;
+    for (long b0 = w.pb; b0 < w.pe; b0 += particle_grain) {
+      const long b1 = std::min(w.pe, b0 + particle_grain);
+      for (std::size_t g = 0; g < groups_.size(); ++g)
+        sweep_runs<Real>(w, g, law.with_ids(groups_[g].law.data()), cut2, inv_rmin, broke, b0, b1);
+      assemble(w, b0, b1, next_touched, f);
+    }
+    return broke;
+  }
+
+  // Evaluate one offset's bonds (i, i + o), i in [b, e), where its runs are.
+  template <class Real, class Law>
+  void sweep_runs(Work& w, std::size_t gi, const Law& law, double cut2, double inv_rmin, long& broke, long b, long e) {
+    const auto& runs = groups_[gi].runs;
+    auto r = std::lower_bound(runs.begin(), runs.end(), b, [](const auto& run, long i) { return run.second <= i; });
+    for (; r != runs.end() && r->first < e; ++r)
+      sweep<Real>(w, gi, law, cut2, inv_rmin, broke, std::max(b, r->first), std::min(e, r->second));
+  }
+
+  // Evaluate one offset's bonds (i, i + o), i in [b, e), into this thread's buffer.
+  template <class Real, class Law>
+  void sweep(Work& w, std::size_t gi, const Law law, double cut2, double inv_rmin, long& broke, long b, long e) {
+    if (b >= e) return;
+    const Group& g = groups_[gi];
     const std::size_t o = static_cast<std::size_t>(g.offset);
     const double* __restrict x0 = xs_[0].data();
     const double* __restrict x1 = xs_[1].data();
     const double* __restrict x2 = xs_[D - 1].data();
     const std::uint8_t* __restrict alive = g.alive.data();
-    double* __restrict F0 = g.F[0].data() + o;
-    double* __restrict F1 = g.F[1].data() + o;
-    double* __restrict F2 = g.F[D - 1].data() + o;
-    // Bonds by their first particle, in this thread's particles: the assembly reads them from this core.
-    const auto [pb, pe] = particle_share(static_cast<long>(n_), tid, nt);
-    const long b = std::min(pb, m), e = std::min(pe, m);
+    // F[i] lives at buffer[i - base]: shift by the buffer's origin (in bounds: i >= base for every bond here)
+    const std::size_t shift = static_cast<std::size_t>(b - w.base);
+    double* __restrict F0 = w.F_of(gi, 0) + shift;
+    double* __restrict F1 = w.F_of(gi, 1) + shift;
+    double* __restrict F2 = w.F_of(gi, D - 1) + shift;
+    const std::size_t ub = static_cast<std::size_t>(b), m = static_cast<std::size_t>(e - b);
 #ifdef PMFRAG_HAVE_AVX512_SWEEP
     if constexpr (std::is_same_v<Real, double> && is_fixed_law<Law>::value) {
-      broke += sweep_fixed_avx512<D, Law::p, Law::q>(x0, x1, x2, o, alive, F0, F1, F2, static_cast<std::size_t>(b),
-                                                     static_cast<std::size_t>(e), law.G, law.H, cut2, inv_rmin);
+      broke += sweep_fixed_avx512<D, Law::p, Law::q>(x0 + ub, x1 + ub, x2 + ub, o, alive + ub, F0, F1, F2, m, law.G,
+                                                     law.H, cut2, inv_rmin);
       return;
     }
 #endif
 #pragma omp simd reduction(+ : broke)
-    for (long p = b; p < e; ++p) {
-      const std::size_t i = static_cast<std::size_t>(p);
+    for (std::size_t k = 0; k < m; ++k) {
+      const std::size_t i = ub + k;
       const double d0 = x0[i] - x0[i + o], d1 = x1[i] - x1[i + o];
       const double d2 = D == 3 ? x2[i] - x2[i + o] : 0.0;
       const double fr = bond_force_over_r<Real>(law, i, d0 * d0 + d1 * d1 + d2 * d2, alive[i] != 0, cut2, inv_rmin, broke);
-      F0[i] = fr * d0;
-      F1[i] = fr * d1;
-      if constexpr (D == 3) F2[i] = fr * d2;
+      F0[k] = fr * d0;
+      F1[k] = fr * d1;
+      if constexpr (D == 3) F2[k] = fr * d2;
     }
   }
 
   template <class Real, class Law>
-  void sparse_pass(const Law law, double cut2, double inv_rmin, long& broke, int tid, int nt) {
-    const long m = static_cast<long>(sparse_.size());
-    const int* __restrict pi = sparse_.i.data();
-    const int* __restrict pj = sparse_.j.data();
-    const std::uint8_t* __restrict alive = sparse_alive_.data();
+  void sparse_pass(Work& w, const Law law, double cut2, double inv_rmin, long& broke) {
+    const long m = static_cast<long>(w.sparse.size());
+    const int* __restrict pi = w.sparse.i.data();
+    const int* __restrict pj = w.sparse.j.data();
+    const std::uint8_t* __restrict alive = w.sparse_alive.data();
     const double* __restrict x0 = xs_[0].data();
     const double* __restrict x1 = xs_[1].data();
     const double* __restrict x2 = xs_[D - 1].data();
-    double* __restrict F0 = sparse_.force[0].data();
-    double* __restrict F1 = sparse_.force[1].data();
-    double* __restrict F2 = sparse_.force[D - 1].data();
-    const auto [first, last] = share(m, tid, nt);
+    double* __restrict F0 = w.sparse.force[0].data();
+    double* __restrict F1 = w.sparse.force[1].data();
+    double* __restrict F2 = w.sparse.force[D - 1].data();
 #pragma omp simd reduction(+ : broke)
-    for (long p = first; p < last; ++p) {
+    for (long p = 0; p < m; ++p) {
       const std::size_t u = static_cast<std::size_t>(p);
       const std::size_t a = static_cast<std::size_t>(pi[u]), b = static_cast<std::size_t>(pj[u]);
       const double d0 = x0[a] - x0[b], d1 = x1[a] - x1[b];
@@ -190,51 +271,95 @@ class BondStencil {
     }
   }
 
-  // f_i += sum over offsets of F[o + i] - F[i], then the sparse bonds of i, each particle in a fixed order
-  // (bitwise the same for any partition into threads). One pass over f in blocks: the offsets' terms are
-  // summed in a small buffer first, so f is read and written once however many offsets there are.
-  void assemble(double* f, int tid, int nt) const {
+  // f_i += sum over offsets of F[i] - F[i - o], then the off-stencil bonds of i, each particle in a fixed
+  // order (bitwise the same for any partition into threads; adding a zero where a particle has no
+  // off-stencil bond changes nothing but the sign of a zero).
+  void assemble(const Work& w, long b0, long b1, std::size_t& next_touched, double* f) const {
     constexpr long block = particle_grain;
-    const long n = static_cast<long>(n_);
-    const int* __restrict off = sparse_.offset.data();
-    const bool any_sparse = sparse_.size() > 0;
-    const auto [pb, pe] = particle_share(n, tid, nt);  // whole blocks
-    for (long blk = pb / block; blk * block < pe; ++blk) {
-      const std::size_t b0 = static_cast<std::size_t>(blk * block);
-      const std::size_t len = static_cast<std::size_t>(std::min(block, n - blk * block));
-      alignas(64) double acc[D][block];
-      for (int c = 0; c < D; ++c)
-        for (std::size_t k = 0; k < len; ++k) acc[c][k] = 0.0;
-      for (const Group& g : groups_) {
-        const std::size_t o = static_cast<std::size_t>(g.offset);
-        for (int c = 0; c < D; ++c) {
-          const double* __restrict F = g.F[c].data() + b0;
-          double* __restrict a = acc[c];
-#pragma omp simd
-          for (std::size_t k = 0; k < len; ++k) a[k] += F[o + k] - F[k];
-        }
-      }
-      if (any_sparse) {
-        for (std::size_t k = 0; k < len; ++k) {
-          if (off[b0 + k] == off[b0 + k + 1]) continue;
-          double sum[D];
-          sparse_.sum_of(b0 + k, sum);
-          for (int c = 0; c < D; ++c) acc[c][k] += sum[c];
-        }
-      }
-      double* __restrict fb = f + b0 * D;
-      for (std::size_t k = 0; k < len; ++k)
-        for (int c = 0; c < D; ++c) fb[k * D + static_cast<std::size_t>(c)] += acc[c][k];
+    const std::size_t len = static_cast<std::size_t>(b1 - b0);
+    const std::size_t at = static_cast<std::size_t>(b0 - w.base);
+    alignas(64) double extra[D][block];  // off-stencil sums of this block's particles
+    bool any_extra = false;
+    const std::vector<int>& touched = w.sparse.touched;
+    for (; next_touched < touched.size() && touched[next_touched] < b1; ++next_touched) {
+      const std::size_t p = static_cast<std::size_t>(touched[next_touched]);
+      if (static_cast<long>(p) < b0) continue;  // a partner outside this thread's particles
+      if (!any_extra)
+        for (int c = 0; c < D; ++c) std::fill_n(extra[c], len, 0.0);
+      any_extra = true;
+      double sum[D];
+      w.sparse.sum_of(p, sum);
+      for (int c = 0; c < D; ++c) extra[c][p - static_cast<std::size_t>(b0)] = sum[c];
     }
+    double* __restrict fb = f + static_cast<std::size_t>(b0) * D;
+#ifdef PMFRAG_HAVE_AVX512_SWEEP
+    // Eight particles at a time with the sums in registers: through memory, the running sums were read
+    // back right after being stored, and the loop ran at a quarter of its speed.
+    const std::size_t ng = groups_.size();
+    const double* row = w.F.data() + at;  // group g, component c at row + (g D + c) stride
+    const std::size_t stride = w.stride;
+    for (std::size_t k = 0; k < len; k += 8) {
+      const std::size_t left = len - k;
+      const __mmask8 lanes = left >= 8 ? __mmask8(0xff) : __mmask8((1u << left) - 1u);
+      __m512d a[D];
+      for (int c = 0; c < D; ++c) a[c] = _mm512_setzero_pd();
+      for (std::size_t g = 0; g < ng; ++g) {
+        const std::size_t o = offsets_[g];
+        for (int c = 0; c < D; ++c) {
+          const double* F = row + (g * D + static_cast<std::size_t>(c)) * stride + k;
+          a[c] = _mm512_add_pd(a[c], _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, F), _mm512_maskz_loadu_pd(lanes, F - o)));
+        }
+      }
+      if (any_extra)
+        for (int c = 0; c < D; ++c) a[c] = _mm512_add_pd(a[c], _mm512_maskz_loadu_pd(lanes, extra[c] + k));
+      double* fk = fb + k * D;
+      if constexpr (D == 2) {
+        // interleave (a0, a1) into x, y pairs: particles k..k+3 and k+4..k+7
+        const __m512i lo = _mm512_set_epi64(11, 3, 10, 2, 9, 1, 8, 0), hi = _mm512_set_epi64(15, 7, 14, 6, 13, 5, 12, 4);
+        const __mmask8 mlo = left >= 4 ? __mmask8(0xff) : __mmask8((1u << (2 * left)) - 1u);
+        const __mmask8 mhi = left >= 8 ? __mmask8(0xff) : left > 4 ? __mmask8((1u << (2 * (left - 4))) - 1u) : __mmask8(0);
+        _mm512_mask_storeu_pd(fk, mlo, _mm512_add_pd(_mm512_maskz_loadu_pd(mlo, fk), _mm512_permutex2var_pd(a[0], lo, a[1])));
+        _mm512_mask_storeu_pd(fk + 8, mhi,
+                              _mm512_add_pd(_mm512_maskz_loadu_pd(mhi, fk + 8), _mm512_permutex2var_pd(a[0], hi, a[1])));
+      } else {
+        alignas(64) double t[D][8];
+        for (int c = 0; c < D; ++c) _mm512_store_pd(t[c], a[c]);
+        for (std::size_t q = 0; q < std::min<std::size_t>(8, left); ++q)
+          for (int c = 0; c < D; ++c) fk[q * D + static_cast<std::size_t>(c)] += t[c][q];
+      }
+    }
+#else
+    alignas(64) double acc[D][block];
+    for (int c = 0; c < D; ++c)
+      for (std::size_t k = 0; k < len; ++k) acc[c][k] = 0.0;
+    for (std::size_t g = 0; g < groups_.size(); ++g) {
+      const std::size_t o = static_cast<std::size_t>(groups_[g].offset);
+      for (int c = 0; c < D; ++c) {
+        const double* __restrict F = w.F_of(g, c) + at;
+        const double* __restrict Fback = F - o;
+        double* __restrict a = acc[c];
+#pragma omp simd
+        for (std::size_t k = 0; k < len; ++k) a[k] += F[k] - Fback[k];
+      }
+    }
+    if (any_extra)
+      for (int c = 0; c < D; ++c)
+        for (std::size_t k = 0; k < len; ++k) acc[c][k] += extra[c][k];
+    for (std::size_t k = 0; k < len; ++k)
+      for (int c = 0; c < D; ++c) fb[k * D + static_cast<std::size_t>(c)] += acc[c][k];
+#endif
   }
 
   std::size_t n_ = 0;
   bool single_ = false;
+  long reach_ = 0;  ///< the largest offset, rounded up to 8
   std::vector<Group> groups_;
-  PairTable<D> sparse_;
+  std::vector<std::size_t> offsets_;  ///< each group's offset
+  std::vector<int> sparse_i_, sparse_j_, sparse_law_;  ///< off-stencil bonds
   std::vector<std::uint8_t> sparse_alive_;
-  std::vector<std::pair<int, int>> loc_;  ///< bond -> (group or -1 for sparse, index)
-  std::vector<double> xs_[D];             ///< positions by component (contiguous sweeps)
+  std::vector<std::pair<int, int>> loc_;  ///< bond -> (group or -1 for off-stencil, index)
+  std::vector<double, AlignedAllocator<double>> xs_[D];  ///< positions by component (contiguous sweeps)
+  std::vector<Work> work_;                ///< per thread of the team, planned on first use
 };
 
 }  // namespace pmfrag::detail

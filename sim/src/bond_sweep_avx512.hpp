@@ -22,18 +22,18 @@
 
 namespace pmfrag::detail {
 
-/// Bonds (i, i + o) for i in [begin, end) of one offset: F[i] = F(r)/r (x_i - x_{i+o}) (zero for bonds gone
-/// or longer than sqrt(cut2)); returns the number of intact bonds found longer than sqrt(cut2).
+/// Bonds (i, i + o) for i in [0, m) of one offset: F[i] = F(r)/r (x_i - x_{i+o}) (zero for bonds gone or
+/// longer than sqrt(cut2)); returns the number of intact bonds found longer than sqrt(cut2).
 template <int D, int P, int Q>
 inline long sweep_fixed_avx512(const double* __restrict x0, const double* __restrict x1, const double* __restrict x2,
                                std::size_t o, const std::uint8_t* __restrict alive, double* __restrict F0,
-                               double* __restrict F1, double* __restrict F2, std::size_t begin, std::size_t end,
+                               double* __restrict F1, double* __restrict F2, std::size_t m,
                                double G, double H, double cut2, double inv_rmin) {
   const __m512d vG = _mm512_set1_pd(G), vH = _mm512_set1_pd(H), vcut2 = _mm512_set1_pd(cut2);
   const __m512d vrmin = _mm512_set1_pd(inv_rmin), half = _mm512_set1_pd(0.5), three_halves = _mm512_set1_pd(1.5);
   long broke = 0;
-  for (std::size_t i = begin; i < end; i += 8) {
-    const std::size_t left = end - i;
+  for (std::size_t i = 0; i < m; i += 8) {
+    const std::size_t left = m - i;
     const __mmask8 lanes = left >= 8 ? __mmask8(0xff) : __mmask8((1u << left) - 1u);
     const __m512d d0 = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, x0 + i), _mm512_maskz_loadu_pd(lanes, x0 + i + o));
     const __m512d d1 = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, x1 + i), _mm512_maskz_loadu_pd(lanes, x1 + i + o));
@@ -55,9 +55,15 @@ inline long sweep_fixed_avx512(const double* __restrict x0, const double* __rest
     const __m512d ie = _mm512_min_pd(y, vrmin);  // force held constant inside r_min (Sec. 4.2)
     const __m512d mag = _mm512_fmsub_pd(vH, pw<Q>(ie), _mm512_mul_pd(vG, pw<P>(ie)));  // > 0 repulsive
     const __m512d fr = _mm512_maskz_mov_pd(live & within, _mm512_mul_pd(mag, y));
-    _mm512_mask_storeu_pd(F0 + i, lanes, _mm512_mul_pd(fr, d0));
-    _mm512_mask_storeu_pd(F1 + i, lanes, _mm512_mul_pd(fr, d1));
-    if constexpr (D == 3) _mm512_mask_storeu_pd(F2 + i, lanes, _mm512_mul_pd(fr, d2));
+    if (left >= 8) {  // plain stores: a masked store cannot forward its data to the assembly's loads
+      _mm512_storeu_pd(F0 + i, _mm512_mul_pd(fr, d0));
+      _mm512_storeu_pd(F1 + i, _mm512_mul_pd(fr, d1));
+      if constexpr (D == 3) _mm512_storeu_pd(F2 + i, _mm512_mul_pd(fr, d2));
+    } else {
+      _mm512_mask_storeu_pd(F0 + i, lanes, _mm512_mul_pd(fr, d0));
+      _mm512_mask_storeu_pd(F1 + i, lanes, _mm512_mul_pd(fr, d1));
+      if constexpr (D == 3) _mm512_mask_storeu_pd(F2 + i, lanes, _mm512_mul_pd(fr, d2));
+    }
   }
   return broke;
 }

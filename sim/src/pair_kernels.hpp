@@ -127,9 +127,10 @@ struct PairTable {
     for (int c = 0; c < D; ++c) s[c] = 0.0;
     for (int e = offset[k]; e < offset[k + 1]; ++e) {
       const int en = entry[static_cast<std::size_t>(e)];
-      const double sign = 1.0 - 2.0 * (en & 1);  // j gets -F
       const std::size_t p = static_cast<std::size_t>(en >> 1);
-      for (int c = 0; c < D; ++c) s[c] += sign * force[c][p];
+      // j gets -F. A select, not a multiplication by a sign made with an int-to-double conversion: that
+      // conversion writes half a register and stalled this loop on the previous one's result.
+      for (int c = 0; c < D; ++c) s[c] += (en & 1) ? -force[c][p] : force[c][p];
     }
   }
   /// f_k += sum of its pairs' forces: thread tid of nt does its share of the particles.
