@@ -96,7 +96,6 @@ class BondStencil {
     }
     for (const Group& g : groups_) offsets_.push_back(static_cast<std::size_t>(g.offset));
     reach_ = (reach_ + 7) / 8 * 8;  // keeps each thread's buffers 64-byte aligned like its particles
-    for (auto& c : xs_) c.assign(n, 0.0);
   }
 
   void set_alive(std::size_t bond, bool alive) {
@@ -119,9 +118,11 @@ class BondStencil {
     if (static_cast<int>(work_.size()) != team.size()) plan(team.size());
     team.run([&](int tid) {
       Work& w = work_[static_cast<std::size_t>(tid)];
-      for (long p = w.pb; p < w.pe; ++p)
-        for (int c = 0; c < D; ++c) xs_[c][static_cast<std::size_t>(p)] = x[static_cast<std::size_t>(p) * D + c];
-      team.barrier();  // the sweeps read neighbours' positions
+      // Each thread copies the positions it reads (its particles and their partners) by component: no
+      // thread waits for another.
+      for (long p = w.xlo; p < w.xhi; ++p)
+        for (int c = 0; c < D; ++c)
+          w.xs[c][static_cast<std::size_t>(p - w.xlo)] = x[static_cast<std::size_t>(p) * D + static_cast<std::size_t>(c)];
       long mine = 0;
       if (single_)
         mine = forces_of<float>(w, law, cut2, inv_rmin, f);
@@ -152,6 +153,8 @@ class BondStencil {
     PairTable<D> sparse;                 ///< off-stencil bonds touching [pb, pe), in ascending global order
     std::vector<int> sparse_id;          ///< their index among all off-stencil bonds (for `alive`)
     std::vector<std::uint8_t> sparse_alive;
+    long xlo = 0, xhi = 0;  ///< the particles whose positions this thread reads
+    std::vector<double, AlignedAllocator<double>> xs[D];  ///< their positions by component, from xlo
   };
 
   // Each thread's share of particles, its sweep buffers (zeros where no bond is ever evaluated: before
@@ -176,6 +179,13 @@ class BondStencil {
         }
       }
       w.sparse.index(n_);
+      w.xlo = std::max(0L, w.pb - reach_);
+      w.xhi = std::min(n, w.pe + reach_);
+      for (std::size_t u = 0; u < w.sparse.size(); ++u)
+        w.xlo = std::min<long>({w.xlo, w.sparse.i[u], w.sparse.j[u]}),
+        w.xhi = std::max<long>({w.xhi, w.sparse.i[u] + 1L, w.sparse.j[u] + 1L});
+      if (w.pb >= w.pe) w.xlo = w.xhi = w.pb;
+      for (auto& c : w.xs) c.assign(static_cast<std::size_t>(w.xhi - w.xlo), 0.0);
       w.sparse_alive.resize(w.sparse_id.size());
     }
   }
@@ -217,29 +227,32 @@ class BondStencil {
     if (b >= e) return;
     const Group& g = groups_[gi];
     const std::size_t o = static_cast<std::size_t>(g.offset);
-    const double* __restrict x0 = xs_[0].data();
-    const double* __restrict x1 = xs_[1].data();
-    const double* __restrict x2 = xs_[D - 1].data();
-    const std::uint8_t* __restrict alive = g.alive.data();
+    const std::size_t ub = static_cast<std::size_t>(b), m = static_cast<std::size_t>(e - b);
+    // positions of particle b + k at x[k] (the thread's copy starts at xlo <= b)
+    const double* __restrict x0 = w.xs[0].data() + (ub - static_cast<std::size_t>(w.xlo));
+    const double* __restrict x1 = w.xs[1].data() + (ub - static_cast<std::size_t>(w.xlo));
+    const double* __restrict x2 = w.xs[D - 1].data() + (ub - static_cast<std::size_t>(w.xlo));
+    const std::uint8_t* __restrict alive = g.alive.data() + ub;
     // F[i] lives at buffer[i - base]: shift by the buffer's origin (in bounds: i >= base for every bond here)
     const std::size_t shift = static_cast<std::size_t>(b - w.base);
     double* __restrict F0 = w.F_of(gi, 0) + shift;
     double* __restrict F1 = w.F_of(gi, 1) + shift;
     double* __restrict F2 = w.F_of(gi, D - 1) + shift;
-    const std::size_t ub = static_cast<std::size_t>(b), m = static_cast<std::size_t>(e - b);
 #ifdef PMFRAG_HAVE_AVX512_SWEEP
     if constexpr (std::is_same_v<Real, double> && is_fixed_law<Law>::value) {
-      broke += sweep_fixed_avx512<D, Law::p, Law::q>(x0 + ub, x1 + ub, x2 + ub, o, alive + ub, F0, F1, F2, m, law.G,
-                                                     law.H, cut2, inv_rmin);
-      return;
+      if (fixed_avx512_scales<Law::p, Law::q>(law.G, law.H)) {
+        broke += sweep_fixed_avx512<D, Law::p, Law::q>(x0, x1, x2, o, alive, F0, F1, F2, m, law.G,
+                                                       law.H, cut2, inv_rmin);
+        return;
+      }
     }
 #endif
 #pragma omp simd reduction(+ : broke)
     for (std::size_t k = 0; k < m; ++k) {
-      const std::size_t i = ub + k;
-      const double d0 = x0[i] - x0[i + o], d1 = x1[i] - x1[i + o];
-      const double d2 = D == 3 ? x2[i] - x2[i + o] : 0.0;
-      const double fr = bond_force_over_r<Real>(law, i, d0 * d0 + d1 * d1 + d2 * d2, alive[i] != 0, cut2, inv_rmin, broke);
+      const double d0 = x0[k] - x0[k + o], d1 = x1[k] - x1[k + o];
+      const double d2 = D == 3 ? x2[k] - x2[k + o] : 0.0;
+      const double fr = bond_force_over_r<Real>(law, ub + k, d0 * d0 + d1 * d1 + d2 * d2, alive[k] != 0, cut2,
+                                                inv_rmin, broke);
       F0[k] = fr * d0;
       F1[k] = fr * d1;
       if constexpr (D == 3) F2[k] = fr * d2;
@@ -252,16 +265,17 @@ class BondStencil {
     const int* __restrict pi = w.sparse.i.data();
     const int* __restrict pj = w.sparse.j.data();
     const std::uint8_t* __restrict alive = w.sparse_alive.data();
-    const double* __restrict x0 = xs_[0].data();
-    const double* __restrict x1 = xs_[1].data();
-    const double* __restrict x2 = xs_[D - 1].data();
+    const double* __restrict x0 = w.xs[0].data();  // particle a at x[a - xlo]
+    const double* __restrict x1 = w.xs[1].data();
+    const double* __restrict x2 = w.xs[D - 1].data();
+    const std::size_t xlo = static_cast<std::size_t>(w.xlo);
     double* __restrict F0 = w.sparse.force[0].data();
     double* __restrict F1 = w.sparse.force[1].data();
     double* __restrict F2 = w.sparse.force[D - 1].data();
 #pragma omp simd reduction(+ : broke)
     for (long p = 0; p < m; ++p) {
       const std::size_t u = static_cast<std::size_t>(p);
-      const std::size_t a = static_cast<std::size_t>(pi[u]), b = static_cast<std::size_t>(pj[u]);
+      const std::size_t a = static_cast<std::size_t>(pi[u]) - xlo, b = static_cast<std::size_t>(pj[u]) - xlo;
       const double d0 = x0[a] - x0[b], d1 = x1[a] - x1[b];
       const double d2 = D == 3 ? x2[a] - x2[b] : 0.0;
       const double fr = bond_force_over_r<Real>(law, u, d0 * d0 + d1 * d1 + d2 * d2, alive[u] != 0, cut2, inv_rmin, broke);
@@ -358,7 +372,6 @@ class BondStencil {
   std::vector<int> sparse_i_, sparse_j_, sparse_law_;  ///< off-stencil bonds
   std::vector<std::uint8_t> sparse_alive_;
   std::vector<std::pair<int, int>> loc_;  ///< bond -> (group or -1 for off-stencil, index)
-  std::vector<double, AlignedAllocator<double>> xs_[D];  ///< positions by component (contiguous sweeps)
   std::vector<Work> work_;                ///< per thread of the team, planned on first use
 };
 

@@ -203,9 +203,12 @@ class PairEffect final : public Effect<D> {
     double* __restrict f1 = list_.force[1].data();
     double* __restrict f2 = list_.force[D - 1].data();
     double* f = s.f.front().data();
+    // A few contacts (before fracture: the pairs across a slit) are not worth waking the team for: two
+    // syncs cost more than the pairs. The sums are the same either way (each particle's order is fixed).
+    constexpr long serial_below = 4096;
     detail::Team& team = detail::Team::get(s.size());
-    team.run([&](int tid) {
-      const auto [first, last] = detail::share(m, tid, team.size());
+    auto body = [&](int tid, int nt) {
+      const auto [first, last] = detail::share(m, tid, nt);
 #pragma omp simd
       for (long p = first; p < last; ++p) {
         const std::size_t u = static_cast<std::size_t>(p);
@@ -223,9 +226,13 @@ class PairEffect final : public Effect<D> {
         f1[u] = fr * d1;
         if constexpr (D == 3) f2[u] = fr * d2;
       }
-      team.barrier();  // the gather reads every thread's pair forces
-      list_.gather(f, tid, team.size());
-    });
+      if (nt > 1) team.barrier();  // the gather reads every thread's pair forces
+      list_.gather(f, tid, nt);
+    };
+    if (m < serial_below)
+      body(0, 1);
+    else
+      team.run([&](int tid) { body(tid, team.size()); });
   }
 
   void retire_broken(const State<D>& s) {
