@@ -191,15 +191,16 @@ TEST(Dynamics, SlitPlateMatchesBruteForceReference) {
 
 namespace {
 // Runs `steps` steps of a scene with a given thread count and returns the final positions and velocities.
+template <int D = 2>
 std::vector<double> final_state(const Scene& sc, int threads, long steps) {
   omp_set_num_threads(threads);
   const System sys = build_system(sc);
   const double dt = choose_step(sc, sys).dt;
-  auto lf = test::make_leapfrog<2>(sys, sc, dt);
+  auto lf = test::make_leapfrog<D>(sys, sc, dt);
   for (long k = 0; k < steps; ++k) lf.step();
   std::vector<double> out;
   for (std::size_t i = 0; i < lf.state().size(); ++i)
-    for (int d = 0; d < 2; ++d) out.push_back(lf.state().x[i][d]), out.push_back(lf.state().v[i][d]);
+    for (int d = 0; d < D; ++d) out.push_back(lf.state().x[i][d]), out.push_back(lf.state().v[i][d]);
   omp_set_num_threads(omp_get_num_procs());
   return out;
 }
@@ -219,6 +220,15 @@ TEST(Dynamics, OneAndTwoThreadsAreBitwiseIdentical) {
     ASSERT_EQ(a.size(), b.size());
     EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)), 0) << sc.file;
   }
+  // The 3-D block: bonds whose index offset spans many blocks of particles (a plane, 2747), so the second
+  // thread evaluates a long stretch of the first one's bonds itself, and off-stencil bonds shared by both.
+  const Scene block = read_scene(test::case_path("block3d_slit.toml"));
+  omp_set_num_threads(2);
+  ASSERT_EQ(step_threads(build_system(block).size()), 2);
+  const auto a = final_state<3>(block, 1, 200);
+  const auto b = final_state<3>(block, 2, 200);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)), 0) << block.file;
 }
 
 TEST(Dynamics, GuardRefusesAStepAboveTheLimit) {
