@@ -110,9 +110,6 @@ class BondStencil {
       sparse_alive_[static_cast<std::size_t>(k)] = alive;
   }
 
-  std::size_t sweeps() const { return groups_.size(); }
-  std::size_t sparse_bonds() const { return sparse_i_.size(); }
-
   /// Adds bond forces to f (N x D, interleaved). Returns a positive number if some intact bond was found
   /// longer than sqrt(cut2) (a bond near a thread boundary may be counted twice): the caller retires them.
   template <class Law>
@@ -311,47 +308,15 @@ class BondStencil {
     }
     double* __restrict fb = f + static_cast<std::size_t>(b0) * D;
 #ifdef PMFRAG_HAVE_AVX512_SWEEP
-    // Eight particles at a time with the sums in registers: through memory, the running sums were read
-    // back right after being stored, and the loop ran at a quarter of its speed.
-    const std::size_t ng = groups_.size();
-    const double* row = w.F.data() + at;  // group g, component c at row + (g D + c) stride
-    const std::size_t stride = w.stride;
-    for (std::size_t k = 0; k < len; k += 8) {
-      const std::size_t left = len - k;
-      const __mmask8 lanes = left >= 8 ? __mmask8(0xff) : __mmask8((1u << left) - 1u);
-      __m512d a[D];
-      for (int c = 0; c < D; ++c) a[c] = _mm512_setzero_pd();
-      for (std::size_t g = 0; g < ng; ++g) {
-        const std::size_t o = offsets_[g];
-        for (int c = 0; c < D; ++c) {
-          const double* F = row + (g * D + static_cast<std::size_t>(c)) * stride + k;
-          a[c] = _mm512_add_pd(a[c], _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, F), _mm512_maskz_loadu_pd(lanes, F - o)));
-        }
-      }
-      if (any_extra)
-        for (int c = 0; c < D; ++c) a[c] = _mm512_add_pd(a[c], _mm512_maskz_loadu_pd(lanes, extra[c] + k));
-      double* fk = fb + k * D;
-      if constexpr (D == 2) {
-        // interleave (a0, a1) into x, y pairs: particles k..k+3 and k+4..k+7
-        const __m512i lo = _mm512_set_epi64(11, 3, 10, 2, 9, 1, 8, 0), hi = _mm512_set_epi64(15, 7, 14, 6, 13, 5, 12, 4);
-        const __mmask8 mlo = left >= 4 ? __mmask8(0xff) : __mmask8((1u << (2 * left)) - 1u);
-        const __mmask8 mhi = left >= 8 ? __mmask8(0xff) : left > 4 ? __mmask8((1u << (2 * (left - 4))) - 1u) : __mmask8(0);
-        _mm512_mask_storeu_pd(fk, mlo, _mm512_add_pd(_mm512_maskz_loadu_pd(mlo, fk), _mm512_permutex2var_pd(a[0], lo, a[1])));
-        _mm512_mask_storeu_pd(fk + 8, mhi,
-                              _mm512_add_pd(_mm512_maskz_loadu_pd(mhi, fk + 8), _mm512_permutex2var_pd(a[0], hi, a[1])));
-      } else {
-        alignas(64) double t[D][8];
-        for (int c = 0; c < D; ++c) _mm512_store_pd(t[c], a[c]);
-        for (std::size_t q = 0; q < std::min<std::size_t>(8, left); ++q)
-          for (int c = 0; c < D; ++c) fk[q * D + static_cast<std::size_t>(c)] += t[c][q];
-      }
-    }
+    static_assert(block == 256, "assemble_block_avx512 takes blocks of 256");
+    assemble_block_avx512<D>(w.F.data() + at, w.stride, offsets_.data(), groups_.size(), any_extra ? extra : nullptr,
+                             fb, len);
 #else
     alignas(64) double acc[D][block];
     for (int c = 0; c < D; ++c)
       for (std::size_t k = 0; k < len; ++k) acc[c][k] = 0.0;
     for (std::size_t g = 0; g < groups_.size(); ++g) {
-      const std::size_t o = static_cast<std::size_t>(groups_[g].offset);
+      const std::size_t o = offsets_[g];
       for (int c = 0; c < D; ++c) {
         const double* __restrict F = w.F_of(g, c) + at;
         const double* __restrict Fback = F - o;
@@ -372,7 +337,7 @@ class BondStencil {
   bool single_ = false;
   long reach_ = 0;  ///< the largest offset, rounded up to 8
   std::vector<Group> groups_;
-  std::vector<std::size_t> offsets_;  ///< each group's offset
+  std::vector<std::size_t> offsets_;  ///< each group's offset, contiguous for the vector assembly
   std::vector<int> sparse_i_, sparse_j_, sparse_law_;  ///< off-stencil bonds
   std::vector<std::uint8_t> sparse_alive_;
   std::vector<std::pair<int, int>> loc_;  ///< bond -> (group or -1 for off-stencil, index)

@@ -203,9 +203,9 @@ class PairEffect final : public Effect<D> {
     double* __restrict f1 = list_.force[1].data();
     double* __restrict f2 = list_.force[D - 1].data();
     double* f = s.f.front().data();
-    // A few contacts (before fracture: the pairs across a slit) are not worth waking the team for: two
-    // syncs cost more than the pairs. The sums are the same either way (each particle's order is fixed).
-    constexpr long serial_below = 4096;
+    // The team's rule for particles holds for pairs too: too few contacts for a second thread (before
+    // fracture, the pairs across a slit) are summed here without waking the team. The sums are the same
+    // either way (each particle's order is fixed).
     detail::Team& team = detail::Team::get(s.size());
     auto body = [&](int tid, int nt) {
       const auto [first, last] = detail::share(m, tid, nt);
@@ -229,7 +229,7 @@ class PairEffect final : public Effect<D> {
       if (nt > 1) team.barrier();  // the gather reads every thread's pair forces
       list_.gather(f, tid, nt);
     };
-    if (m < serial_below)
+    if (detail::Team::threads_for(static_cast<std::size_t>(m)) == 1)
       body(0, 1);
     else
       team.run([&](int tid) { body(tid, team.size()); });
