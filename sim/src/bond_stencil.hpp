@@ -5,7 +5,9 @@
 // Bonds off the common offsets (around holes and slits, between bodies) go through a pair table and a gather.
 //
 // Sweep and assembly run together, one block of 256 particles at a time: a block's bond forces are summed
-// into f while they are still in L1. Each thread keeps the bond forces of its own particles, and evaluates
+// into f while they are still in L1. The assembly reads F[i - o] at most one block plus the largest offset
+// back, so each offset's F is a ring of R slots (R a power of two, at least that far): the buffers stay in
+// L2 however large the body (the 3-D block's full-length rows, 17 MB, streamed through memory). Each thread keeps the bond forces of its own particles, and evaluates
 // the few bonds (i - o, i) reaching back into the previous thread's particles itself (the same arithmetic,
 // so the same bits), so no thread waits for another between the sweep and the assembly. Every particle's
 // sum has a fixed order: forces are bitwise the same for any thread count.
@@ -54,12 +56,11 @@ class BondStencil {
     std::map<int, int> group_of;
     for (auto [o, c] : count) {
       // A sweep evaluates only the runs of consecutive i that have a bond, but the assembly visits every
-      // particle once per offset and reads F[i - o] back: from L1 when o is within a block, from further
-      // away when not. Measured (plate; 3-D block, 1 thread): an offset is worth a sweep when at least 40 %
-      // of its slots are bonds, or 5 % if it is shorter than a block (the plate's 39: 22 %, 10 % faster as
-      // a sweep; the block's plane offsets at 15-36 %: 40 % slower as sweeps than as off-stencil bonds).
+      // particle once per offset. Measured (1 thread): an offset is worth a sweep when at least 5 % of its
+      // slots are bonds (the plate's 39: 22 %, 10 % faster as a sweep; the 3-D block's inter-plane offsets at
+      // 15-36 %: the bond pass 1.36 -> 0.94 ms once they were swept from rings that stay in L2).
       const double density = static_cast<double>(c) / static_cast<double>(n - static_cast<std::size_t>(o));
-      if (static_cast<std::size_t>(o) < n && c >= 8 && (density >= 0.4 || (o < particle_grain && density >= 0.05))) {
+      if (static_cast<std::size_t>(o) < n && c >= 8 && density >= 0.05) {
         group_of[o] = static_cast<int>(groups_.size());
         Group g;
         g.offset = o;
@@ -100,6 +101,16 @@ class BondStencil {
     }
     for (const Group& g : groups_) offsets_.push_back(static_cast<std::size_t>(g.offset));
     reach_ = (reach_ + 7) / 8 * 8;  // keeps each thread's buffers 64-byte aligned like its particles
+    // a block's assembly reads back to F[b0 - reach]; the block being swept must not overwrite it
+    ring_ = particle_grain;
+    while (ring_ < static_cast<std::size_t>(reach_) + particle_grain) ring_ *= 2;
+    // small bodies: one slot per particle if that fits in L2 (the plate: 1.5 us a step slower on a ring of
+    // two blocks, as the gaps between runs must then be zeroed)
+    std::size_t whole = ring_;
+    while (whole < n_ + static_cast<std::size_t>(reach_)) whole *= 2;
+    if (whole * groups_.size() * D * sizeof(double) <= (256u << 10)) ring_ = whole;
+    // if no slot is ever reused, the slots no bond maps to keep their initial zeros
+    wraps_ = ring_ < n_ + static_cast<std::size_t>(reach_);
   }
 
   void set_alive(std::size_t bond, bool alive) {
@@ -143,9 +154,10 @@ class BondStencil {
   };
   /// One thread's particles [pb, pe) and what it needs to sum their bond forces by itself.
   struct Work {
-    long pb = 0, pe = 0, base = 0;  ///< the buffers hold bond i at [i - base], base = pb - reach
-    std::vector<double, AlignedAllocator<double>> F;  ///< per group and component (stride `stride`): force on
-                                                      ///< i of bond (i, i + offset)
+    long pb = 0, pe = 0;
+    /// per group and component (stride `stride`): force on i of bond (i, i + offset) at slot i mod R; slots
+    /// [R, R + 8) repeat [0, 8), so a vector starting anywhere in the ring reads on without wrapping
+    std::vector<double, AlignedAllocator<double>> F;
     std::size_t stride = 0;
     double* F_of(std::size_t g, int c) { return F.data() + (g * D + static_cast<std::size_t>(c)) * stride; }
     const double* F_of(std::size_t g, int c) const {
@@ -156,6 +168,8 @@ class BondStencil {
     std::vector<std::uint8_t> sparse_alive;
     long xlo = 0, xhi = 0;  ///< the particles whose positions this thread reads
     std::vector<double, AlignedAllocator<double>> xs[D];  ///< their positions by component, from xlo
+    std::vector<std::size_t> first_run, next_run;  ///< per group: the first run the thread sweeps; the
+                                                   ///< first not yet swept this step
   };
 
   // Each thread's share of particles, its sweep buffers (zeros where no bond is ever evaluated: before
@@ -166,10 +180,9 @@ class BondStencil {
     for (int t = 0; t < threads; ++t) {
       Work& w = work_[static_cast<std::size_t>(t)];
       std::tie(w.pb, w.pe) = particle_share(n, t, threads);
-      w.base = w.pb - reach_;
       // 64-byte aligned rows whose stride is an odd number of cache lines, so the rows do not all fall
       // into the same L1 sets
-      w.stride = (static_cast<std::size_t>(w.pe - w.base) + 7) / 8 * 8;
+      w.stride = ring_ + particle_grain + 8;
       if ((w.stride / 8) % 2 == 0) w.stride += 8;
       w.F.assign(groups_.size() * D * w.stride, 0.0);
       for (std::size_t b = 0; b < sparse_i_.size(); ++b) {
@@ -188,6 +201,13 @@ class BondStencil {
       if (w.pb >= w.pe) w.xlo = w.xhi = w.pb;
       for (auto& c : w.xs) c.assign(static_cast<std::size_t>(w.xhi - w.xlo), 0.0);
       w.sparse_alive.resize(w.sparse_id.size());
+      for (const Group& g : groups_) {
+        const long from = std::max(0L, w.pb - g.offset);
+        w.first_run.push_back(static_cast<std::size_t>(
+            std::lower_bound(g.runs.begin(), g.runs.end(), from, [](const auto& run, long i) { return run.second <= i; }) -
+            g.runs.begin()));
+      }
+      w.next_run = w.first_run;
     }
   }
 
@@ -199,10 +219,13 @@ class BondStencil {
     for (std::size_t u = 0; u < w.sparse_id.size(); ++u)
       w.sparse_alive[u] = sparse_alive_[static_cast<std::size_t>(w.sparse_id[u])];
     if (w.sparse.size() > 0) sparse_pass<Real>(w, law.with_ids(w.sparse.law.data()), cut2, inv_rmin, broke);
-    // The bonds (i, i + o) with i < pb whose second particle is ours.
-    for (std::size_t g = 0; g < groups_.size(); ++g)
+    w.next_run = w.first_run;
+    // The bonds (i, i + o) with i < pb whose second particle is ours (none before particle 0: zeros).
+    for (std::size_t g = 0; g < groups_.size(); ++g) {
+      zero(w, g, w.pb - groups_[g].offset, std::min(0L, w.pb));
       sweep_runs<Real>(w, g, law.with_ids(groups_[g].law.data()), cut2, inv_rmin, broke,
                        std::max(0L, w.pb - groups_[g].offset), w.pb);
+    }
     std::size_t next_touched = 0;
     for (long b0 = w.pb; b0 < w.pe; b0 += particle_grain) {
       const long b1 = std::min(w.pe, b0 + particle_grain);
@@ -213,13 +236,37 @@ class BondStencil {
     return broke;
   }
 
-  // Evaluate one offset's bonds (i, i + o), i in [b, e), where its runs are.
+  // Evaluate one offset's bonds (i, i + o), i in [b, e), where its runs are; zeros between them (the ring's
+  // slots hold other particles' forces from before). One block at a time: a block's slots do not wrap.
   template <class Real, class Law>
   void sweep_runs(Work& w, std::size_t gi, const Law& law, double cut2, double inv_rmin, long& broke, long b, long e) {
+    // the thread sweeps each offset's bonds in ascending i: the runs before b are behind its cursor
     const auto& runs = groups_[gi].runs;
-    auto r = std::lower_bound(runs.begin(), runs.end(), b, [](const auto& run, long i) { return run.second <= i; });
-    for (; r != runs.end() && r->first < e; ++r)
-      sweep<Real>(w, gi, law, cut2, inv_rmin, broke, std::max(b, r->first), std::min(e, r->second));
+    auto r = runs.begin() + static_cast<std::ptrdiff_t>(w.next_run[gi]);
+    while (r != runs.end() && r->second <= b) ++r;
+    for (long c0 = b; c0 < e;) {
+      const long c1 = std::min(e, (c0 / particle_grain + 1) * particle_grain);
+      long at = c0;
+      for (; r != runs.end() && r->first < c1; ++r) {
+        const long rb = std::max(at, r->first), re = std::min(c1, r->second);
+        zero(w, gi, at, rb);
+        sweep<Real>(w, gi, law, cut2, inv_rmin, broke, rb, re);
+        at = re;
+        if (r->second > c1) break;  // the run goes on in the next block
+      }
+      zero(w, gi, at, c1);
+      w.next_run[gi] = static_cast<std::size_t>(r - runs.begin());
+      if (slot(c0) < particle_grain)  // this block wrote the ring's first block: repeat it past the end
+        for (int c = 0; c < D; ++c) std::copy_n(w.F_of(gi, c) + slot(c0), c1 - c0, w.F_of(gi, c) + ring_ + slot(c0));
+      c0 = c1;
+    }
+  }
+
+  std::size_t slot(long i) const { return static_cast<std::size_t>(i) & (ring_ - 1); }
+
+  void zero(Work& w, std::size_t gi, long b, long e) const {
+    if (wraps_ && b < e)
+      for (int c = 0; c < D; ++c) std::fill_n(w.F_of(gi, c) + slot(b), e - b, 0.0);
   }
 
   // Evaluate one offset's bonds (i, i + o), i in [b, e), into this thread's buffer.
@@ -234,8 +281,8 @@ class BondStencil {
     const double* __restrict x1 = w.xs[1].data() + (ub - static_cast<std::size_t>(w.xlo));
     const double* __restrict x2 = w.xs[D - 1].data() + (ub - static_cast<std::size_t>(w.xlo));
     const std::uint8_t* __restrict alive = g.alive.data() + ub;
-    // F[i] lives at buffer[i - base]: shift by the buffer's origin (in bounds: i >= base for every bond here)
-    const std::size_t shift = static_cast<std::size_t>(b - w.base);
+    // F[i] lives at slot i mod R ([b, e) lies in one block: no wrap)
+    const std::size_t shift = slot(b);
     double* __restrict F0 = w.F_of(gi, 0) + shift;
     double* __restrict F1 = w.F_of(gi, 1) + shift;
     double* __restrict F2 = w.F_of(gi, D - 1) + shift;
@@ -292,7 +339,7 @@ class BondStencil {
   void assemble(const Work& w, long b0, long b1, std::size_t& next_touched, double* f) const {
     constexpr long block = particle_grain;
     const std::size_t len = static_cast<std::size_t>(b1 - b0);
-    const std::size_t at = static_cast<std::size_t>(b0 - w.base);
+    const std::size_t at = slot(b0);
     alignas(64) double extra[D][block];  // off-stencil sums of this block's particles
     bool any_extra = false;
     const std::vector<int>& touched = w.sparse.touched;
@@ -309,20 +356,25 @@ class BondStencil {
     double* __restrict fb = f + static_cast<std::size_t>(b0) * D;
 #ifdef PMFRAG_HAVE_AVX512_SWEEP
     static_assert(block == 256, "assemble_block_avx512 takes blocks of 256");
-    assemble_block_avx512<D>(w.F.data() + at, w.stride, offsets_.data(), groups_.size(), any_extra ? extra : nullptr,
-                             fb, len);
+    assemble_block_avx512<D>(w.F.data(), at, ring_ - 1, w.stride, offsets_.data(), groups_.size(),
+                             any_extra ? extra : nullptr, fb, len);
 #else
     alignas(64) double acc[D][block];
     for (int c = 0; c < D; ++c)
       for (std::size_t k = 0; k < len; ++k) acc[c][k] = 0.0;
     for (std::size_t g = 0; g < groups_.size(); ++g) {
       const std::size_t o = offsets_[g];
+      // F[i - o] from slot (at - o) mod R on, wrapping to slot 0 after R - that
+      const std::size_t back = (at + ring_ - o) & (ring_ - 1), unwrapped = std::min(len, ring_ - back);
       for (int c = 0; c < D; ++c) {
         const double* __restrict F = w.F_of(g, c) + at;
-        const double* __restrict Fback = F - o;
+        const double* __restrict Fback = w.F_of(g, c) + back;
+        const double* __restrict Fwrapped = w.F_of(g, c) - unwrapped;
         double* __restrict a = acc[c];
 #pragma omp simd
-        for (std::size_t k = 0; k < len; ++k) a[k] += F[k] - Fback[k];
+        for (std::size_t k = 0; k < unwrapped; ++k) a[k] += F[k] - Fback[k];
+#pragma omp simd
+        for (std::size_t k = unwrapped; k < len; ++k) a[k] += F[k] - Fwrapped[k];
       }
     }
     if (any_extra)
@@ -336,6 +388,8 @@ class BondStencil {
   std::size_t n_ = 0;
   bool single_ = false;
   long reach_ = 0;  ///< the largest offset, rounded up to 8
+  std::size_t ring_ = particle_grain;  ///< R: slots per offset and component of a thread's F
+  bool wraps_ = true;                  ///< some slot of a ring holds more than one particle
   std::vector<Group> groups_;
   std::vector<std::size_t> offsets_;  ///< each group's offset, contiguous for the vector assembly
   std::vector<int> sparse_i_, sparse_j_, sparse_law_;  ///< off-stencil bonds
