@@ -189,6 +189,39 @@ TEST(Dynamics, SlitPlateMatchesBruteForceReference) {
   EXPECT_GT((x[n - 1] - sys.position[n - 1].head<2>()).norm(), 1e-3);
 }
 
+TEST(Dynamics, BlockBondForcesMatchAPlainSumOverBonds) {
+  // The 3-D block, every particle moved at random by up to 2 % of r0 so that each bond carries a real force,
+  // against F(r)/r d summed bond by bond. The block is large enough that the bond stencil keeps each index
+  // offset's forces in a ring of slots that wraps; a slot read before it is rewritten, or a stale one, shows here.
+  // (without its slit: particles facing each other across it would also repel as contacts)
+  const Scene sc = read_scene(test::case_path("block3d_slit.toml"), {"body.0.slits=[]"});
+  System sys = build_system(sc);
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> jitter(-0.02 * sys.r0, 0.02 * sys.r0);
+  for (auto& p : sys.position)
+    for (int d = 0; d < 3; ++d) p[d] += jitter(rng);
+  for (int threads : {1, 2}) {
+    omp_set_num_threads(threads);
+    ASSERT_EQ(step_threads(sys.size()), threads);
+    const auto lf = test::make_leapfrog<3>(sys, sc, sc.time.dt);
+    std::vector<Eigen::Vector3d> f(sys.size(), Eigen::Vector3d::Zero());
+    for (const auto& b : sys.bonds) {
+      const std::size_t i = static_cast<std::size_t>(b[0]), j = static_cast<std::size_t>(b[1]);
+      const Eigen::Vector3d d = sys.position[i] - sys.position[j];
+      const double r = d.norm();
+      ASSERT_LT(r, sys.cutoff);
+      f[i] += sys.laws[0].force(r) / r * d;
+      f[j] -= sys.laws[0].force(r) / r * d;
+    }
+    double worst = 0.0, scale = 0.0;
+    for (std::size_t i = 0; i < sys.size(); ++i)
+      worst = std::max(worst, (lf.state().f[i] - f[i]).norm()), scale = std::max(scale, f[i].norm());
+    EXPECT_GT(scale, 1e3) << "dyn: the jitter should load the bonds";
+    EXPECT_LT(worst, 1e-9 * scale) << threads << " thread(s)";
+  }
+  omp_set_num_threads(omp_get_num_procs());
+}
+
 namespace {
 // Runs `steps` steps of a scene with a given thread count and returns the final positions and velocities.
 template <int D = 2>
@@ -220,8 +253,9 @@ TEST(Dynamics, OneAndTwoThreadsAreBitwiseIdentical) {
     ASSERT_EQ(a.size(), b.size());
     EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)), 0) << sc.file;
   }
-  // The 3-D block: bonds whose index offset spans many blocks of particles (a plane, 2747), so the second
-  // thread evaluates a long stretch of the first one's bonds itself, and off-stencil bonds shared by both.
+  // The 3-D block: bonds whose index offset spans several blocks of particles (up to 862), so the second
+  // thread evaluates a long stretch of the first one's bonds itself, and off-stencil bonds (at the slit)
+  // shared by both.
   const Scene block = read_scene(test::case_path("block3d_slit.toml"));
   omp_set_num_threads(2);
   ASSERT_EQ(step_threads(build_system(block).size()), 2);

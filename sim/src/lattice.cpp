@@ -48,20 +48,23 @@ Sites close_packed_lattice(double r0, const Vec3& origin, int nx, int ny, int nz
   const Vec3 shiftA(0, 0, 0), shiftB(-dx, dy / 3.0, 0), shiftC(-dx, -dy / 3.0, 0);
   Sites s;
   s.dim = 3;
-  int n = 0;
-  for (int k = 0; k < nz; ++k) {
-    Vec3 shift;
-    if (stacking == Stacking::hcp)
-      shift = (k % 2 == 0) ? shiftB : shiftA;  // the paper's odd (1-based) sections shifted: ABAB
-    else
-      shift = (k % 3 == 0) ? shiftB : (k % 3 == 1) ? shiftA : shiftC;
-    for (int j = 0; j < ny; ++j)
+  // Stored row by row through the thickness (i fastest, then the section k, then the row j), numbered
+  // section by section (index = 1 + i + nx (j + ny k)): a particle's bonds then reach at most one row of
+  // every section ahead (nx nz + nx + 1 places, 862 in the paper's block) instead of a whole section
+  // (nx ny + nx + 1, 2789), so the bond stencil's buffers stay in L2.
+  for (int j = 0; j < ny; ++j)
+    for (int k = 0; k < nz; ++k) {
+      Vec3 shift;
+      if (stacking == Stacking::hcp)
+        shift = (k % 2 == 0) ? shiftB : shiftA;  // the paper's odd (1-based) sections shifted: ABAB
+      else
+        shift = (k % 3 == 0) ? shiftB : (k % 3 == 1) ? shiftA : shiftC;
       for (int i = 0; i < nx; ++i) {
         const double x = origin.x() + r0 * i - ((j % 2) ? dx : 0.0);
         s.position.emplace_back(x + shift.x(), origin.y() + dy * j + shift.y(), origin.z() + dz * k);
-        s.index.push_back(++n);
+        s.index.push_back(1 + i + nx * (j + ny * k));
       }
-  }
+    }
   return s;
 }
 

@@ -26,7 +26,8 @@ enum class Stacking { hcp, fcc };
 
 /// Close-packed block (Sec. 3.2): sections k = 0..nz-1 of the triangular lattice at z0 + k r0 sqrt(6)/3.
 /// hcp: sections alternate shifts B = (-r0/2, +r0 sin60/3) and A = (0, 0), as printed; fcc: B, A, C with
-/// C = (-r0/2, -r0 sin60/3).
+/// C = (-r0/2, -r0 sin60/3). Sites are numbered section by section but stored row j by row, each row
+/// through all sections (see lattice.cpp: it keeps bonded particles close in memory).
 Sites close_packed_lattice(double r0, const Vec3& origin, int nx, int ny, int nz, Stacking stacking);
 
 /// The lattice-site counts that cover a bounding box [min, max] starting at min (one extra column so the
