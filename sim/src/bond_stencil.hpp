@@ -7,10 +7,11 @@
 // Sweep and assembly run together, one block of 256 particles at a time: a block's bond forces are summed
 // into f while they are still in L1. The assembly reads F[i - o] at most one block plus the largest offset
 // back, so each offset's F is a ring of R slots (R a power of two, at least that far): the buffers stay in
-// L2 however large the body (the 3-D block's full-length rows, 17 MB, streamed through memory). Each thread keeps the bond forces of its own particles, and evaluates
-// the few bonds (i - o, i) reaching back into the previous thread's particles itself (the same arithmetic,
-// so the same bits), so no thread waits for another between the sweep and the assembly. Every particle's
-// sum has a fixed order: forces are bitwise the same for any thread count.
+// L2 however large the body (the 3-D block's full-length rows, 17 MB, streamed through memory). Each thread
+// keeps the bond forces of its own particles, and evaluates the few bonds (i - o, i) reaching back into the
+// previous thread's particles itself (the same arithmetic, so the same bits), so no thread waits for another
+// between the sweep and the assembly. Every particle's sum has a fixed order: forces are bitwise the same
+// for any thread count.
 #pragma once
 
 #include "aligned.hpp"
@@ -60,7 +61,7 @@ class BondStencil {
       // slots are bonds (the plate's 39: 22 %, 10 % faster as a sweep; the 3-D block's inter-plane offsets at
       // 15-36 %: the bond pass 1.36 -> 0.94 ms once they were swept from rings that stay in L2).
       const double density = static_cast<double>(c) / static_cast<double>(n - static_cast<std::size_t>(o));
-      if (static_cast<std::size_t>(o) < n && c >= 8 && density >= 0.05) {
+      if (static_cast<std::size_t>(o) < n && c >= 8 && density >= 0.05 && groups_.size() < max_stencil_offsets) {
         group_of[o] = static_cast<int>(groups_.size());
         Group g;
         g.offset = o;
@@ -156,7 +157,7 @@ class BondStencil {
   struct Work {
     long pb = 0, pe = 0;
     /// per group and component (stride `stride`): force on i of bond (i, i + offset) at slot i mod R; slots
-    /// [R, R + 8) repeat [0, 8), so a vector starting anywhere in the ring reads on without wrapping
+    /// [R, R + 256) repeat the first block, so a block's F[i - o] read from anywhere in the ring never wraps
     std::vector<double, AlignedAllocator<double>> F;
     std::size_t stride = 0;
     double* F_of(std::size_t g, int c) { return F.data() + (g * D + static_cast<std::size_t>(c)) * stride; }
@@ -180,10 +181,9 @@ class BondStencil {
     for (int t = 0; t < threads; ++t) {
       Work& w = work_[static_cast<std::size_t>(t)];
       std::tie(w.pb, w.pe) = particle_share(n, t, threads);
-      // 64-byte aligned rows whose stride is an odd number of cache lines, so the rows do not all fall
-      // into the same L1 sets
+      // the ring, its repeated first block, and one cache line more: R and 256 are even numbers of cache
+      // lines, so the stride is odd and the 64-byte aligned rows do not all fall into the same L1 sets
       w.stride = ring_ + particle_grain + 8;
-      if ((w.stride / 8) % 2 == 0) w.stride += 8;
       w.F.assign(groups_.size() * D * w.stride, 0.0);
       for (std::size_t b = 0; b < sparse_i_.size(); ++b) {
         const auto in = [&](int p) { return p >= w.pb && p < w.pe; };
@@ -364,17 +364,13 @@ class BondStencil {
       for (std::size_t k = 0; k < len; ++k) acc[c][k] = 0.0;
     for (std::size_t g = 0; g < groups_.size(); ++g) {
       const std::size_t o = offsets_[g];
-      // F[i - o] from slot (at - o) mod R on, wrapping to slot 0 after R - that
-      const std::size_t back = (at + ring_ - o) & (ring_ - 1), unwrapped = std::min(len, ring_ - back);
+      const std::size_t back = slot(b0 - static_cast<long>(o));  // F[i - o], read on into the repeated block
       for (int c = 0; c < D; ++c) {
         const double* __restrict F = w.F_of(g, c) + at;
         const double* __restrict Fback = w.F_of(g, c) + back;
-        const double* __restrict Fwrapped = w.F_of(g, c) - unwrapped;
         double* __restrict a = acc[c];
 #pragma omp simd
-        for (std::size_t k = 0; k < unwrapped; ++k) a[k] += F[k] - Fback[k];
-#pragma omp simd
-        for (std::size_t k = unwrapped; k < len; ++k) a[k] += F[k] - Fwrapped[k];
+        for (std::size_t k = 0; k < len; ++k) a[k] += F[k] - Fback[k];
       }
     }
     if (any_extra)

@@ -10,6 +10,14 @@
 // vector arithmetic, so the result does not depend on how the range is split among threads.
 #pragma once
 
+#include <cstddef>
+
+namespace pmfrag::detail {
+/// At most this many index offsets are swept (the block assembly keeps one back-offset per offset on its
+/// stack); further offsets go through the pair table. The paper's bodies have 4 (plate) and 13 (3-D block).
+inline constexpr std::size_t max_stencil_offsets = 64;
+}  // namespace pmfrag::detail
+
 #if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__)
 #define PMFRAG_HAVE_AVX512_SWEEP 1
 // GCC 12 reports its own intrinsics' placeholder operands (_mm512_undefined_*) as maybe uninitialized.
@@ -97,14 +105,14 @@ inline long sweep_fixed_avx512(const double* __restrict x0, const double* __rest
 /// The assembly of one block of len particles: f_i += sum over the offsets o_g of F_g[i] - F_g[i - o_g], then
 /// + extra[i] if given, f (N x D, interleaved) from the block's first particle. F_g's component c is the ring
 /// at rows + (g D + c) stride: particle i at slot i & mask, the block's first at slot `at`; a ring's slots
-/// [mask + 1, mask + 8] repeat its first ones. Eight particles at a time with the
-/// sums in registers: through memory, the running sums were read back right after being stored, and the
-/// loop ran at a quarter of its speed.
+/// from mask + 1 on repeat its first block, so F_g[i - o_g] is read on without wrapping. Eight particles at
+/// a time with the sums in registers: through memory, the running sums were read back right after being
+/// stored, and the loop ran at a quarter of its speed.
 template <int D>
 inline void assemble_block_avx512(const double* rows, std::size_t at, std::size_t mask, std::size_t stride,
                                   const std::size_t* offsets, std::size_t groups, const double (*extra)[256], double* f,
                                   std::size_t len) {
-  std::ptrdiff_t back[64];  // from F_g[i] to F_g[i - o_g]
+  std::ptrdiff_t back[max_stencil_offsets];  // from F_g[i] to F_g[i - o_g]
   for (std::size_t g = 0; g < groups; ++g)
     back[g] = static_cast<std::ptrdiff_t>((at + mask + 1 - offsets[g]) & mask) - static_cast<std::ptrdiff_t>(at);
   for (std::size_t k = 0; k < len; k += 8) {
