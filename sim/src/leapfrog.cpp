@@ -10,6 +10,37 @@
 
 namespace pmfrag {
 
+namespace {
+
+struct Kick {
+  long bad;     ///< components that moved more than the component limit (or are not finite)
+  double max2;  ///< cm^2: the largest squared component move
+};
+
+// Eqs. (12)-(14) on the flat components [b, e) of the N x D arrays. A function of its own, not the body of
+// the lambda handed to the thread team: inlined into the team's dispatch thunk, GCC 12 kept the reduction
+// variables in memory, and the two-thread plate's pass took 15,000 cycles instead of 3,000 (measured); kept
+// out of line so every caller runs the same, vectorized code.
+[[gnu::noinline]] Kick kick_drift(double* __restrict x, double* __restrict v, double* __restrict f, const double* __restrict inv_mass,
+                       long b, long e, double h, double dt, double component_limit2) {
+  long bad = 0;
+  double max2 = 0.0;
+#pragma omp simd reduction(+ : bad) reduction(max : max2)
+  for (long j = b; j < e; ++j) {
+    const double vj = v[j] + (h * inv_mass[j]) * f[j];
+    const double dx = dt * vj;
+    v[j] = vj;
+    x[j] += dx;
+    f[j] = 0.0;  // used; the next evaluation adds into zeros
+    const double d2 = dx * dx;
+    bad += !(d2 <= component_limit2);
+    max2 = std::max(max2, d2);
+  }
+  return {bad, max2};
+}
+
+}  // namespace
+
 template <int D>
 Leapfrog<D>::Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>> effects, double dt, bool adaptive)
     : effects_(std::move(effects)), uniform_(!adaptive) {
@@ -73,26 +104,9 @@ void Leapfrog<D>::step(double dt) {
   std::atomic<long> bad_total{0};
   max2_of_.assign(static_cast<std::size_t>(detail::Team::get(s_.size()).size()), 0.0);
   detail::for_particles(s_.size(), [&](long first, long last, int tid) {
-    double* __restrict x = xp;
-    double* __restrict v = vp;
-    double* __restrict f = fp;
-    const double* __restrict inv_mass = mp;
-    const long b = first * D, e = last * D;
-    long bad = 0;
-    double max2 = 0.0;
-#pragma omp simd reduction(+ : bad) reduction(max : max2)
-    for (long j = b; j < e; ++j) {
-      const double vj = v[j] + (h * inv_mass[j]) * f[j];
-      const double dx = dt * vj;
-      v[j] = vj;
-      x[j] += dx;
-      f[j] = 0.0;  // used; the next evaluation adds into zeros
-      const double d2 = dx * dx;
-      bad += !(d2 <= component_limit2);
-      max2 = std::max(max2, d2);
-    }
-    if (bad > 0) bad_total.fetch_add(bad, std::memory_order_relaxed);
-    max2_of_[static_cast<std::size_t>(tid)] = max2;
+    const Kick k = kick_drift(xp, vp, fp, mp, first * D, last * D, h, dt, component_limit2);
+    if (k.bad > 0) bad_total.fetch_add(k.bad, std::memory_order_relaxed);
+    max2_of_[static_cast<std::size_t>(tid)] = k.max2;
   });
   const long bad = bad_total.load();
   const double max2 = *std::max_element(max2_of_.begin(), max2_of_.end());
