@@ -33,6 +33,9 @@ class CellList {
       entries_[i] = {pack(c), static_cast<std::uint32_t>(i)};
     }
     std::sort(entries_.begin(), entries_.end());
+    // positions in cell order: the inner loop reads a contiguous run instead of jumping through x
+    sorted_.resize(n);
+    for (std::size_t a = 0; a < n; ++a) sorted_[a] = x[entries_[a].index];
     const double cut2 = cutoff * cutoff;
     std::size_t begin = 0;
     while (begin < n) {
@@ -51,13 +54,17 @@ class CellList {
             auto range = std::equal_range(entries_.begin(), entries_.end(), Entry{nkey, 0},
                                           [](const Entry& a, const Entry& b) { return a.key < b.key; });
             checks_ += (end - begin) * static_cast<std::size_t>(range.second - range.first);
+            const std::size_t nb = static_cast<std::size_t>(range.first - entries_.begin());
+            const std::size_t ne = static_cast<std::size_t>(range.second - entries_.begin());
             for (std::size_t a = begin; a < end; ++a) {
               const std::uint32_t i = entries_[a].index;
-              for (auto it = range.first; it != range.second; ++it) {
-                const std::uint32_t j = it->index;
-                if (nkey == key && j <= i) continue;
-                const double r2 = (x[i] - x[j]).squaredNorm();
-                if (r2 < cut2) f(std::min(i, j), std::max(i, j), r2);
+              const V xi = sorted_[a];
+              for (std::size_t b = nkey == key ? a + 1 : nb; b < ne; ++b) {  // same cell: sorted by index
+                const double r2 = (xi - sorted_[b]).squaredNorm();
+                if (r2 < cut2) {
+                  const std::uint32_t j = entries_[b].index;
+                  f(std::min(i, j), std::max(i, j), r2);
+                }
               }
             }
           }
@@ -90,6 +97,7 @@ class CellList {
             static_cast<std::int64_t>(k >> 42)};
   }
   std::vector<Entry> entries_;
+  std::vector<V> sorted_;  ///< positions in entries_ order
   std::size_t checks_ = 0;
 };
 
