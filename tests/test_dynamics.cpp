@@ -222,6 +222,35 @@ TEST(Dynamics, BlockBondForcesMatchAPlainSumOverBonds) {
   omp_set_num_threads(omp_get_num_procs());
 }
 
+TEST(Dynamics, CutoffListKeepsEveryPairWithinDAsTheLatticeCollapses) {
+  // The (3,5) plate under the cutoff reading, into its collapse (pairs form and break by the hundred after
+  // 3.5e-3 s): the forces the engine holds, from its Verlet list (rebuilt only when the displacements since
+  // the last build could have used up the skin), against F(r)/r d summed over every pair closer than D.
+  const Scene sc = read_scene(test::case_path("slit_plate_3_5.toml"), {"pair.model=\"cutoff\""});
+  const System sys = build_system(sc);
+  auto lf = test::make_leapfrog<2>(sys, sc, sc.time.dt);
+  for (long k = 0; k < 38000; ++k) lf.step();
+  const auto& x = lf.state().x;
+  const std::size_t n = x.size();
+  std::vector<Eigen::Vector2d> f(n, Eigen::Vector2d::Zero());
+  long pairs = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 1; j < n; ++j) {
+      const Eigen::Vector2d d = x[i] - x[j];
+      const double r = d.norm();
+      if (r > sys.cutoff) continue;
+      ++pairs;
+      f[i] += sys.laws[0].force(r) / r * d;
+      f[j] -= sys.laws[0].force(r) / r * d;
+    }
+  double worst = 0.0, scale = 0.0;
+  for (std::size_t i = 0; i < n; ++i)
+    worst = std::max(worst, (lf.state().f[i] - f[i]).norm()), scale = std::max(scale, f[i].norm());
+  std::printf("pairs within D at %.2e s: %ld (bonds at the start: %zu)\n", lf.state().time(), pairs, sys.bonds.size());
+  EXPECT_GT(pairs, static_cast<long>(sys.bonds.size())) << "the lattice should have collapsed: new pairs within D";
+  EXPECT_LT(worst, 1e-9 * scale) << "dyn (largest force " << scale << " dyn)";
+}
+
 namespace {
 // Runs `steps` steps of a scene with a given thread count and returns the final positions and velocities.
 template <int D = 2>
