@@ -113,7 +113,7 @@ class PairEffect final : public Effect<D> {
     // The displacements themselves decide (one pass over the particles, cheaper than a rebuild: the broken
     // cutoff plate rebuilt every 24 steps on the bound, at ~2 ms each). Well before the skin is used up
     // the list is rebuilt anyway, so this pass does not run every step.
-    if (std::isfinite(moved_bound_) && x_build_.size() == s.size() * D) {
+    if (std::isfinite(moved_bound_)) {  // (infinite: a bond broke, rebuild now)
       const double moved = std::sqrt(max_displacement2(s));
       if (2.0 * moved < 0.75 * skin_) {
         moved_bound_ = moved;  // still a bound on every particle's displacement since the build
@@ -267,22 +267,18 @@ class PairEffect final : public Effect<D> {
   // Verlet list of pairs within reach + skin. Bonded: excludes intact bonds (they act through the stencil).
   void rebuild(const State<D>& s) {
     list_.clear();
-    std::vector<int> bond_off, bond_other;
+    ByFirst bonded;  // intact bonds by first particle
     if (spec_.model == PairModel::bonded) {
-      bond_off.assign(n_ + 1, 0);
+      std::vector<std::pair<int, int>> intact;
       for (std::size_t b = 0; b < bi_.size(); ++b)
-        if (alive_[b]) ++bond_off[static_cast<std::size_t>(bi_[b]) + 1];
-      for (std::size_t k = 0; k < n_; ++k) bond_off[k + 1] += bond_off[k];
-      bond_other.resize(static_cast<std::size_t>(bond_off[n_]));
-      std::vector<int> fill(bond_off.begin(), bond_off.end() - 1);
-      for (std::size_t b = 0; b < bi_.size(); ++b)
-        if (alive_[b]) bond_other[static_cast<std::size_t>(fill[static_cast<std::size_t>(bi_[b])]++)] = bj_[b];
+        if (alive_[b]) intact.push_back({bi_[b], bj_[b]});
+      bonded = by_first(intact);
     }
     std::vector<std::pair<int, int>> found;
     cells_.for_each_pair(s.x, max_reach_ + skin_, [&](std::uint32_t a, std::uint32_t b, double) {
       if (spec_.model == PairModel::bonded) {
-        for (int e = bond_off[a]; e < bond_off[a + 1]; ++e)
-          if (bond_other[static_cast<std::size_t>(e)] == static_cast<int>(b)) return;
+        for (int e = bonded.start[a]; e < bonded.start[a + 1]; ++e)
+          if (bonded.other[static_cast<std::size_t>(e)] == static_cast<int>(b)) return;
       }
       found.push_back({static_cast<int>(a), static_cast<int>(b)});
     });
@@ -290,16 +286,9 @@ class PairEffect final : public Effect<D> {
     // built (pairs beyond reach add exactly zero): contact forces are then independent of rebuild timing.
     // By first particle with a counting sort, then each particle's few partners (a std::sort of the whole
     // list was 15 % of the broken cutoff plate's run).
-    std::vector<int> first(n_ + 1, 0);
-    for (const auto& pr : found) ++first[static_cast<std::size_t>(pr.first) + 1];
-    for (std::size_t k = 0; k < n_; ++k) first[k + 1] += first[k];
-    std::vector<int> partner(found.size());
-    {
-      std::vector<int> fill(first.begin(), first.end() - 1);
-      for (const auto& [a, b] : found) partner[static_cast<std::size_t>(fill[static_cast<std::size_t>(a)]++)] = b;
-    }
+    ByFirst pairs = by_first(found);
     for (std::size_t a = 0; a < n_; ++a) {
-      const auto b0 = partner.begin() + first[a], b1 = partner.begin() + first[a + 1];
+      const auto b0 = pairs.other.begin() + pairs.start[a], b1 = pairs.other.begin() + pairs.start[a + 1];
       std::sort(b0, b1);
       for (auto it = b0; it != b1; ++it) list_.add(static_cast<int>(a), *it, law_of(static_cast<int>(a), *it));
     }
@@ -307,6 +296,22 @@ class PairEffect final : public Effect<D> {
     if (spec_.model == PairModel::cutoff) list_stencil_ = detail::BondStencil<D>(n_, list_.i, list_.j, list_.law, spec_.single_precision);
     moved_bound_ = 0.0;
     x_build_.assign(s.x.front().data(), s.x.front().data() + s.size() * D);
+  }
+
+  /// Pairs (a, b) grouped by a (a counting sort): a's partners are other[start[a], start[a + 1]), in the
+  /// order given.
+  struct ByFirst {
+    std::vector<int> start, other;
+  };
+  ByFirst by_first(const std::vector<std::pair<int, int>>& pairs) const {
+    ByFirst g;
+    g.start.assign(n_ + 1, 0);
+    for (const auto& pr : pairs) ++g.start[static_cast<std::size_t>(pr.first) + 1];
+    for (std::size_t k = 0; k < n_; ++k) g.start[k + 1] += g.start[k];
+    g.other.resize(pairs.size());
+    std::vector<int> fill(g.start.begin(), g.start.end() - 1);
+    for (const auto& [a, b] : pairs) g.other[static_cast<std::size_t>(fill[static_cast<std::size_t>(a)]++)] = b;
+    return g;
   }
 
   double max_displacement2(const State<D>& s) const {

@@ -24,8 +24,8 @@ class Team {
   static Team& get(std::size_t particles);
   /// 8192, or the environment's PMFRAG_MIN_PARTICLES_PER_THREAD. Below it a thread's share of a step is a
   /// few microseconds and waiting for the other threads costs more than it saves: on the project's 2-core
-  /// VM the (7,14) plate (2698 particles) ran 2.5e8 particle-steps/s on one thread and 1.9e8 on two,
-  /// the 3-D block (54,940) 2.7-4.3e7 on one and 5.0-5.2e7 on two (docs/performance.md, session 5).
+  /// VM the (7,14) plate (2698 particles) ran 2.5-2.7e8 particle-steps/s on one thread and on two alike,
+  /// the 3-D block (54,940) 5.3-6.0e7 on one and 0.8-1.05e8 on two (docs/performance.md, session 7).
   static std::size_t min_particles_per_thread();
   static int threads_for(std::size_t particles);
 
