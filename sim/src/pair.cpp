@@ -43,7 +43,7 @@ class PairEffect final : public Effect<D> {
     contact_reach_.resize(laws_.size());
     for (std::size_t l = 0; l < laws_.size(); ++l) contact_reach_[l] = laws_[l].equilibrium_spacing();
     max_reach_ = spec_.model == PairModel::cutoff ? cutoff_ : *std::max_element(contact_reach_.begin(), contact_reach_.end());
-    skin_ = 0.3 * sys.r0;
+    r0_ = sys.r0;
     law_mass_.assign(laws_.size(), std::numeric_limits<double>::infinity());
     for (std::size_t a = 0; a < nphase_; ++a)
       for (std::size_t b = 0; b < nphase_; ++b) {
@@ -59,7 +59,9 @@ class PairEffect final : public Effect<D> {
   }
 
   void setup(State<D>& s) override {
-    if (uses_list_) rebuild(s);
+    if (!uses_list_) return;
+    skin_ = skin_min_ = starting_skin(s);
+    rebuild(s);
   }
   void canonicalize(const State<D>& s) override {
     if (uses_list_) rebuild(s);
@@ -93,6 +95,7 @@ class PairEffect final : public Effect<D> {
     out.push_back(static_cast<double>(first_break_step_));
     out.push_back(first_break_time_);
     for (std::size_t b = 0; b < alive_.size(); ++b) out.push_back(alive_[b]), out.push_back(phi_break_[b]);
+    out.push_back(skin_);  // the adapted skin decides when the list is next rebuilt: part of the state
   }
   void load(const double*& in) override {
     first_break_step_ = static_cast<long>(*in++);
@@ -102,6 +105,7 @@ class PairEffect final : public Effect<D> {
       phi_break_[b] = *in++;
       if (spec_.model == PairModel::bonded) stencil_.set_alive(b, alive_[b]);
     }
+    skin_ = *in++;
   }
 
   void after_move(State<D>& s, double max_step) override {
@@ -119,6 +123,7 @@ class PairEffect final : public Effect<D> {
         moved_bound_ = moved;  // still a bound on every particle's displacement since the build
         return;
       }
+      adapt_skin(s.step - built_step_);
     }
     rebuild(s);
   }
@@ -264,6 +269,32 @@ class PairEffect final : public Effect<D> {
     }
   }
 
+  // The skin trades pairs evaluated every step against rebuilds (~1.5 ms for the plate, ~60 steps' work).
+  // An intact lattice wants a skin inside the gap between D and the next lattice shell (the (7,14) cutoff
+  // plate: D = 1.7 r0, next shell sqrt(3) r0; a skin of 0.3 r0 doubled the pairs and cost 40 % of the quiet
+  // phase); a broken one, with pieces flying at ~1e4 cm/s, wants a wide one (fixed skins over the whole
+  // cutoff (7,14) run: 0.025 r0 56,205 rebuilds 45 s, 0.3 r0 2,016 8.1 s, 0.6 r0 259 6.8 s, 1.0 r0 58 10.9 s).
+  // So the skin follows the rebuild interval: doubled when the list lasted under 200 steps, halved (not
+  // below the start) when it lasted over 2,000. Decided from step counts only: runs are reproducible.
+  void adapt_skin(long steps_lasted) {
+    if (steps_lasted < 200)
+      skin_ = std::min(2.0 * skin_, skin_max_ * r0_);
+    else if (steps_lasted > 2000)
+      skin_ = std::max(0.5 * skin_, skin_min_);
+  }
+
+  // 3/4 of the gap between the reach and the closest pair beyond it at the start (a lattice's next shell),
+  // kept within [0.01, 0.3] r0.
+  double starting_skin(const State<D>& s) {
+    double closest2 = std::numeric_limits<double>::infinity();
+    const double reach2 = max_reach_ * max_reach_;
+    cells_.for_each_pair(s.x, max_reach_ + 0.3 * r0_, [&](std::uint32_t, std::uint32_t, double r2) {
+      if (r2 > reach2) closest2 = std::min(closest2, r2);
+    });
+    const double gap = std::sqrt(closest2) - max_reach_;  // infinite: nothing beyond reach within 0.3 r0
+    return std::clamp(0.75 * gap, 0.01 * r0_, 0.3 * r0_);
+  }
+
   // Verlet list of pairs within reach + skin. Bonded: excludes intact bonds (they act through the stencil).
   void rebuild(const State<D>& s) {
     list_.clear();
@@ -295,6 +326,7 @@ class PairEffect final : public Effect<D> {
     list_.index(n_);
     if (spec_.model == PairModel::cutoff) list_stencil_ = detail::BondStencil<D>(n_, list_.i, list_.j, list_.law, spec_.single_precision);
     moved_bound_ = 0.0;
+    built_step_ = s.step;
     x_build_.assign(s.x.front().data(), s.x.front().data() + s.size() * D);
   }
 
@@ -332,7 +364,10 @@ class PairEffect final : public Effect<D> {
   std::vector<PairLaw> laws_;
   std::vector<int> phase_, pair_law_;
   std::size_t nphase_ = 1, n_ = 0;
-  double cutoff_ = 0.0, inv_rmin_ = 0.0, r_min_ = 0.0, skin_ = 0.0, max_reach_ = 0.0;
+  double cutoff_ = 0.0, inv_rmin_ = 0.0, r_min_ = 0.0, max_reach_ = 0.0, r0_ = 0.0;
+  double skin_ = 0.0, skin_min_ = 0.0;  ///< cm: Verlet skin now, and its floor (the starting skin)
+  static constexpr double skin_max_ = 0.8;  ///< r0
+  long built_step_ = 0;  ///< step of the last list build
   std::vector<double> contact_reach_;
   bool uses_list_ = false;
   std::vector<int> bi_, bj_, blaw_;  ///< original bonds (i < j) and their law
