@@ -251,6 +251,41 @@ TEST(Dynamics, CutoffListKeepsEveryPairWithinDAsTheLatticeCollapses) {
   EXPECT_LT(worst, 1e-9 * scale) << "dyn (largest force " << scale << " dyn)";
 }
 
+TEST(Dynamics, VerletSkinFitsTheIntactLatticeAndWidensOnceItBreaks) {
+  // The cutoff reading's list holds pairs within D + skin. On the intact plate a skin inside the gap between
+  // D = 1.7 r0 and the second shell at sqrt(3) r0 keeps the list to the bonds (a wider one doubles it); once
+  // the plate breaks and pieces fly, the list lasts only a few steps at that skin, and the skin widens.
+  const Scene sc = read_scene(test::case_path("slit_plate_7_14.toml"), {"pair.model=\"cutoff\""});
+  const System sys = build_system(sc);
+  auto lf = test::make_leapfrog<2>(sys, sc, sc.time.dt);
+  const Effect<2>& pair = *lf.effects().front();
+  const double gap = std::sqrt(3.0) * sys.r0 - sys.cutoff;
+  EXPECT_GT(bond_view<2>(pair).skin, 0.5 * gap);
+  EXPECT_LT(bond_view<2>(pair).skin, gap);
+  for (long k = 0; k < 20000; ++k) lf.step();  // quiet: the pulled rows set the pace of rebuilds
+  const long quiet_builds = bond_view<2>(pair).list_builds;
+  std::printf("first 20,000 steps: %ld list builds, skin %.3g r0\n", quiet_builds, bond_view<2>(pair).skin / sys.r0);
+  EXPECT_LT(quiet_builds, 40);
+  EXPECT_LT(bond_view<2>(pair).skin, gap);
+  while (lf.state().time() < 1.2e-2) lf.step();  // broken near 1.0e-2 s
+  std::printf("at %.3g s: %ld list builds, skin %.3g r0\n", lf.state().time(), bond_view<2>(pair).list_builds,
+              bond_view<2>(pair).skin / sys.r0);
+  EXPECT_GT(bond_view<2>(pair).skin, 0.2 * sys.r0);
+}
+
+TEST(Dynamics, BondedContactListIsRarelyRebuiltBeforeFracture) {
+  // The bonded reading's list holds only contacts (unbonded pairs nearer than r0 + skin): before anything
+  // breaks, only the pulled rows move it. (A skin taken from the bonds' own spacing, where no gap exists,
+  // rebuilt it every ~400 steps: 12 % of the plate's time.)
+  const Scene sc = read_scene(test::case_path("slit_plate_7_14.toml"));
+  const System sys = build_system(sc);
+  auto lf = test::make_leapfrog<2>(sys, sc, sc.time.dt);
+  for (long k = 0; k < 20000; ++k) lf.step();
+  const BondView<2> v = bond_view<2>(*lf.effects().front());
+  std::printf("bonded, first 20,000 steps: %ld list builds, skin %.3g r0\n", v.list_builds, v.skin / sys.r0);
+  EXPECT_LE(v.list_builds, 5);
+}
+
 namespace {
 // Runs `steps` steps of a scene with a given thread count and returns the final positions and velocities.
 template <int D = 2>

@@ -184,6 +184,7 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
   for (const auto& e : lf.effects()) {
     const auto bv = bond_view<D>(*e);
     if (bv.alive && bv.first_break_step >= 0) res.first_break_time = bv.first_break_time;
+    if (bv.alive) res.list_builds = bv.list_builds, res.skin = bv.skin;
   }
 
   // run.json: what ran and how fast (for sweeps and benchmarks); written whole, then renamed.
@@ -199,7 +200,9 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
        << ",\n  \"dt_limit_s\": " << fmt("%.10g", limit) << ",\n  \"wall_s\": " << fmt("%.6g", res.wall_s)
        << ",\n  \"particle_steps_per_s\": " << fmt("%.6g", res.particle_steps_per_s())
        << ",\n  \"threads\": " << step_threads(res.particles)
-       << ",\n  \"first_break_time_s\": " << fmt("%.10g", res.first_break_time) << "\n}\n";
+       << ",\n  \"first_break_time_s\": " << fmt("%.10g", res.first_break_time)
+       << ",\n  \"neighbour_list_builds\": " << res.list_builds
+       << ",\n  \"verlet_skin_r0\": " << fmt("%.4g", res.skin / sys.r0) << "\n}\n";
   }
   fs::rename(tmp, dir / "run.json");
   return res;

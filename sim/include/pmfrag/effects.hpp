@@ -83,6 +83,8 @@ struct BondView {
   const std::vector<std::uint8_t>* alive = nullptr;
   long first_break_step = -1;
   double first_break_time = -1.0;  ///< s
+  long list_builds = 0;  ///< neighbour-list builds since the run (or its resume) started; 0 if it keeps no list
+  double skin = 0.0;     ///< cm: the Verlet skin now (it adapts; see pair.cpp)
 };
 template <int D>
 BondView<D> bond_view(const Effect<D>& e);

@@ -29,6 +29,8 @@ struct RunResult {
   std::size_t particles = 0;
   double dt = 0.0, dt_limit = 0.0, wall_s = 0.0;
   double first_break_time = -1.0;  ///< s; -1 if no bond broke
+  long list_builds = 0;            ///< neighbour-list builds (since a resume, if resumed)
+  double skin = 0.0;               ///< cm: the Verlet skin at the end (0: no list)
   bool adaptive = false;           ///< dt = "adaptive": dt is the cap, dt_min the smallest step taken
   double dt_min = 0.0;             ///< s
   bool completed = false;          ///< false: stopped by the guard or interrupted (message says why)
