@@ -8,6 +8,8 @@ Two inputs, one per reading of the model (docs/physics.md):
                eps, sigma chosen so that its force is exactly -G/r^p + H/r^q.
   bonded.in  - the original bonds through bond_style table (the same law, tabulated finely), and mie/cut only
                up to r0 for non-bonded contacts (special_bonds excludes bonded pairs), as pmfrag's bonded model.
+  cutoff_tight.in - cutoff.in with the skin pmfrag starts from (3/4 of the gap between D and the next lattice
+               shell at sqrt(3) r0): fewer pairs per step, more rebuilds; the bench takes LAMMPS' faster skin.
 Kinematic rows are atom types 2 and 3 (pmfrag scene --lammps-data writes them): velocity set + setforce 0.
 """
 import math
@@ -71,6 +73,9 @@ bond_coeff 1 {r0}
 special_bonds lj 1 1 1
 run {steps}
 """)
+# Both lattices (triangular, fcc) have a shell at sqrt(3) r0, the first beyond D = 1.7 r0.
+tight = 0.75 * (math.sqrt(3.0) * r0 - cutoff) if math.sqrt(3.0) * r0 > cutoff else 0.3 * r0
+(out / "cutoff_tight.in").write_text((out / "cutoff.in").read_text().replace(f"neighbor {0.3 * r0} bin", f"neighbor {tight} bin"))
 (out / "bonded.in").write_text(common + f"""
 pair_style mie/cut {r0}
 pair_coeff * * {eps:.16g} {sigma:.16g} {gR} {gA}
