@@ -77,7 +77,7 @@ class Effect {
 template <int D>
 std::vector<std::unique_ptr<Effect<D>>> make_effects(const System& sys, const Scene& scene);
 
-/// Internals exposed for tests: bond state of the pair effect, if any.
+/// Internals exposed for tests and run.json: bond and neighbour-list state of the pair effect, if any.
 template <int D>
 struct BondView {
   const std::vector<std::uint8_t>* alive = nullptr;
