@@ -75,7 +75,7 @@ void run(const RunCli& o) {
   }
   std::printf("%s: %ld steps, %ld frames, %zu particles in %.3g s (%.3g particle-steps/s, %d threads)\n",
               r.completed ? "finished" : "STOPPED", r.steps, r.frames, r.particles, r.wall_s, r.particle_steps_per_s(),
-              step_threads(r.particles));
+              r.threads());
   if (r.first_break_time >= 0)
     std::printf("first broken bond at t = %.6e s\n", r.first_break_time);
   else
@@ -102,7 +102,7 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--set", o->set, "Override a scene key, e.g. --set time.end=2e-3 (repeatable)")->type_name("KEY=VALUE");
   cmd->add_flag("--allow-unstable", o->allow_unstable, "Run even if dt exceeds the Eq. 15 stability limit");
   cmd->add_flag("--force", o->force, "Overwrite an existing trajectory in the output folder");
-  cmd->add_option("--threads", o->threads, "Threads (default: all cores, each given at least 8192 particles; results are identical)")
+  cmd->add_option("--threads", o->threads, "At most this many threads (default: all cores); the run measures which count is fastest. Results are identical for any count")
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--quiet,-q", o->quiet, "No progress or log lines");
   cmd->callback([o] { run(*o); });

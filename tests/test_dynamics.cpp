@@ -329,6 +329,39 @@ TEST(Dynamics, OneAndTwoThreadsAreBitwiseIdentical) {
   EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)), 0) << block.file;
 }
 
+TEST(Dynamics, MeasuredThreadCountLeavesTheTrajectoryBitwiseUnchanged) {
+  // By default a run times short windows of steps on one and on two threads every so often and keeps the
+  // faster (thread_tuner.hpp), so the count changes during a run. The impact (contacts form and part)
+  // switched back and forth this way must end bitwise where one thread alone ends.
+  const Scene sc = read_scene(test::case_path("impact.toml"));
+  const long steps = 40000;
+  const auto alone = final_state(sc, 1, steps);
+  set_min_particles_per_thread(0);  // measure (another test may have fixed the rule)
+  omp_set_num_threads(2);
+  const System sys = build_system(sc);
+  auto lf = test::make_leapfrog<2>(sys, sc, choose_step(sc, sys).dt);
+  for (long k = 0; k < steps; ++k) lf.step();
+  const std::vector<long>& by = lf.thread_steps();
+  ASSERT_GE(by.size(), 3u);
+  std::printf("impact, %ld steps: %ld on one thread, %ld on two\n", steps, by[1], by[2]);
+  EXPECT_GT(by[1], 0) << "the tuner should have timed one thread";
+  EXPECT_GT(by[2], 0) << "the tuner should have timed two threads";
+  EXPECT_EQ(by[1] + by[2], steps);
+  std::vector<double> tuned;
+  for (std::size_t i = 0; i < lf.state().size(); ++i)
+    for (int d = 0; d < 2; ++d) tuned.push_back(lf.state().x[i][d]), tuned.push_back(lf.state().v[i][d]);
+  ASSERT_EQ(tuned.size(), alone.size());
+  EXPECT_EQ(std::memcmp(tuned.data(), alone.data(), tuned.size() * sizeof(double)), 0);
+  // A fixed rule is not measured: every step on the threads it gives.
+  set_min_particles_per_thread(1);
+  auto fixed = test::make_leapfrog<2>(sys, sc, choose_step(sc, sys).dt);
+  for (long k = 0; k < 500; ++k) fixed.step();
+  ASSERT_GE(fixed.thread_steps().size(), 3u);
+  EXPECT_EQ(fixed.thread_steps()[2], 500);
+  set_min_particles_per_thread(0);
+  omp_set_num_threads(omp_get_num_procs());
+}
+
 TEST(Dynamics, GuardRefusesAStepAboveTheLimit) {
   Scene sc = read_scene(test::case_path("slit_plate_7_14.toml"), {"time.dt=1e-6", "time.end=1e-3"});
   RunOptions ro;

@@ -130,9 +130,12 @@ class BondStencil {
   long add_forces(const double* x, double* f, const Law& law, double cut2, double inv_rmin) {
     std::atomic<long> broke{0};
     Team& team = Team::get(n_);
-    if (static_cast<int>(work_.size()) != team.size()) plan(team.size());
+    const std::size_t threads = static_cast<std::size_t>(team.size());
+    if (plans_.size() <= threads) plans_.resize(threads + 1);
+    if (plans_[threads].empty()) plans_[threads] = plan(team.size());
+    std::vector<Work>& work = plans_[threads];
     team.run([&](int tid) {
-      Work& w = work_[static_cast<std::size_t>(tid)];
+      Work& w = work[static_cast<std::size_t>(tid)];
       // Each thread copies the positions it reads (its particles and their partners) by component: no
       // thread waits for another.
       for (long p = w.xlo; p < w.xhi; ++p)
@@ -177,11 +180,11 @@ class BondStencil {
 
   // Each thread's share of particles, its sweep buffers (zeros where no bond is ever evaluated: before
   // particle 0 and past n - offset) and its off-stencil bonds.
-  void plan(int threads) {
-    work_.assign(static_cast<std::size_t>(threads), Work{});
+  std::vector<Work> plan(int threads) const {
+    std::vector<Work> work(static_cast<std::size_t>(threads));
     const long n = static_cast<long>(n_);
     for (int t = 0; t < threads; ++t) {
-      Work& w = work_[static_cast<std::size_t>(t)];
+      Work& w = work[static_cast<std::size_t>(t)];
       std::tie(w.pb, w.pe) = particle_share(n, t, threads);
       // the ring, its repeated first block, and one cache line more: R and 256 are even numbers of cache
       // lines, so the stride is odd and the 64-byte aligned rows do not all fall into the same L1 sets
@@ -211,6 +214,7 @@ class BondStencil {
       }
       w.next_run = w.first_run;
     }
+    return work;
   }
 
   // This thread's bond forces: off-stencil bonds first, then block by block every offset's sweep and the
@@ -393,7 +397,7 @@ class BondStencil {
   std::vector<int> sparse_i_, sparse_j_, sparse_law_;  ///< off-stencil bonds
   std::vector<std::uint8_t> sparse_alive_;
   std::vector<std::pair<int, int>> loc_;  ///< bond -> (group or -1 for off-stencil, index)
-  std::vector<Work> work_;                ///< per thread of the team, planned on first use
+  std::vector<std::vector<Work>> plans_;  ///< by team size: per thread, planned on first use
 };
 
 }  // namespace pmfrag::detail

@@ -1,6 +1,7 @@
 #include "pmfrag/leapfrog.hpp"
 
 #include "team.hpp"
+#include "thread_tuner.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -43,7 +44,7 @@ struct Kick {
 
 template <int D>
 Leapfrog<D>::Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>> effects, double dt, bool adaptive)
-    : effects_(std::move(effects)), uniform_(!adaptive) {
+    : effects_(std::move(effects)), uniform_(!adaptive), tuner_(std::make_unique<detail::ThreadTuner>(sys.size())) {
   const std::size_t n = sys.size();
   s_.dt = dt;
   s_.r0 = sys.r0;
@@ -70,6 +71,16 @@ Leapfrog<D>::Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>>
   inv_mass_dof_.resize(n * D);  // after setup: kinematic boundaries zero their particles' inverse mass
   for (std::size_t j = 0; j < n * D; ++j) inv_mass_dof_[j] = s_.inv_mass[j / D];
   compute_forces();
+}
+
+template <int D>
+Leapfrog<D>::Leapfrog(Leapfrog&&) noexcept = default;
+template <int D>
+Leapfrog<D>::~Leapfrog() = default;
+
+template <int D>
+const std::vector<long>& Leapfrog<D>::thread_steps() const {
+  return tuner_->steps_with();
 }
 
 template <int D>
@@ -101,8 +112,10 @@ void Leapfrog<D>::step(double dt) {
   double* const vp = s_.v.front().data();
   double* const fp = s_.f.front().data();
   const double* const mp = inv_mass_dof_.data();
+  tuner_->before_step();
+  const int threads = detail::Team::get(s_.size()).size();
   std::atomic<long> bad_total{0};
-  max2_of_.assign(static_cast<std::size_t>(detail::Team::get(s_.size()).size()), 0.0);
+  max2_of_.assign(static_cast<std::size_t>(threads), 0.0);
   detail::for_particles(s_.size(), [&](long first, long last, int tid) {
     const Kick k = kick_drift(xp, vp, fp, mp, first * D, last * D, h, dt, component_limit2);
     if (k.bad > 0) bad_total.fetch_add(k.bad, std::memory_order_relaxed);
@@ -132,6 +145,7 @@ void Leapfrog<D>::step(double dt) {
   const double max_step = std::sqrt(D * max2);
   for (auto* e : after_move_) e->after_move(s_, max_step);
   compute_forces(true);
+  tuner_->after_step(threads);
 }
 
 template <int D>

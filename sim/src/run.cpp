@@ -179,6 +179,7 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
   res.wall_s = std::chrono::duration<double>(clock::now() - t0).count();
   res.steps = lf.state().step;
   res.dt_min = dt_min_taken;
+  res.thread_steps = lf.thread_steps();
   res.frames = writer.frames();
   writer.close();
   for (const auto& e : lf.effects()) {
@@ -199,7 +200,12 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
        << ",\n  \"dt_adaptive\": " << (adaptive ? "true" : "false") << ",\n  \"dt_min_s\": " << fmt("%.10g", res.dt_min)
        << ",\n  \"dt_limit_s\": " << fmt("%.10g", limit) << ",\n  \"wall_s\": " << fmt("%.6g", res.wall_s)
        << ",\n  \"particle_steps_per_s\": " << fmt("%.6g", res.particle_steps_per_s())
-       << ",\n  \"threads\": " << step_threads(res.particles)
+       << ",\n  \"threads\": " << res.threads() << ",\n  \"steps_by_threads\": {" << [&] {
+            std::string by;
+            for (std::size_t t = 1; t < res.thread_steps.size(); ++t)
+              if (res.thread_steps[t] > 0) by += (by.empty() ? "\"" : ", \"") + std::to_string(t) + "\": " + std::to_string(res.thread_steps[t]);
+            return by;
+          }() << "}"
        << ",\n  \"first_break_time_s\": " << fmt("%.10g", res.first_break_time)
        << ",\n  \"neighbour_list_builds\": " << res.list_builds
        << ",\n  \"verlet_skin_r0\": " << fmt("%.4g", res.skin / sys.r0) << "\n}\n";

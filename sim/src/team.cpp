@@ -30,31 +30,47 @@ void spin_until(Done&& done) {
   }
 }
 
+constexpr std::size_t default_min_particles = 8192;
+long env_min_particles() {
+  const char* env = std::getenv("PMFRAG_MIN_PARTICLES_PER_THREAD");
+  return env ? std::atol(env) : 0;
+}
 std::atomic<std::size_t>& min_particles_setting() {
-  static std::atomic<std::size_t> m{[] {
-    const char* env = std::getenv("PMFRAG_MIN_PARTICLES_PER_THREAD");
-    const long v = env ? std::atol(env) : 0;
-    return v > 0 ? static_cast<std::size_t>(v) : std::size_t{8192};
-  }()};
+  static std::atomic<std::size_t> m{env_min_particles() > 0 ? static_cast<std::size_t>(env_min_particles())
+                                                             : default_min_particles};
   return m;
 }
+std::atomic<bool>& rule_fixed() {
+  static std::atomic<bool> fixed{env_min_particles() > 0};
+  return fixed;
+}
+thread_local int tuned = 0;
+
+int max_threads() { return std::max(1, omp_get_max_threads()); }
 }  // namespace
 
 std::size_t Team::min_particles_per_thread() { return min_particles_setting().load(std::memory_order_relaxed); }
+bool Team::thread_rule_fixed() { return rule_fixed().load(std::memory_order_relaxed); }
 
 int Team::threads_for(std::size_t particles) {
   const std::size_t fit = std::max<std::size_t>(1, particles / min_particles_per_thread());
-  return static_cast<int>(std::min<std::size_t>(fit, static_cast<std::size_t>(std::max(1, omp_get_max_threads()))));
+  return static_cast<int>(std::min<std::size_t>(fit, static_cast<std::size_t>(max_threads())));
 }
 
+int Team::most_threads_for(std::size_t particles) {
+  const std::size_t fit = std::max<std::size_t>(1, particles / static_cast<std::size_t>(particle_grain));
+  return static_cast<int>(std::min<std::size_t>(fit, static_cast<std::size_t>(max_threads())));
+}
+
+void Team::set_tuned_threads(int threads) { tuned = std::max(0, threads); }
+
 Team& Team::get(std::size_t particles) {
-  thread_local std::unique_ptr<Team> team;
-  const int want = threads_for(particles);
-  if (!team || team->size() != want) {
-    team.reset();
-    team = std::make_unique<Team>(want);
-  }
-  return *team;
+  thread_local std::vector<std::unique_ptr<Team>> teams;  // by size
+  const int want = tuned > 0 ? std::min(tuned, most_threads_for(particles)) : threads_for(particles);
+  const std::size_t k = static_cast<std::size_t>(want);
+  if (teams.size() <= k) teams.resize(k + 1);
+  if (!teams[k]) teams[k] = std::make_unique<Team>(want);
+  return *teams[k];
 }
 
 Team::Team(int threads) : size_(std::max(1, threads)) {
@@ -109,6 +125,9 @@ void Team::barrier() {
 }  // namespace pmfrag::detail
 
 namespace pmfrag {
-void set_min_particles_per_thread(std::size_t n) { detail::min_particles_setting().store(std::max<std::size_t>(1, n)); }
+void set_min_particles_per_thread(std::size_t n) {
+  detail::min_particles_setting().store(n > 0 ? n : detail::default_min_particles);
+  detail::rule_fixed().store(n > 0);
+}
 int step_threads(std::size_t particles) { return detail::Team::threads_for(particles); }
 }  // namespace pmfrag

@@ -19,15 +19,25 @@ namespace pmfrag::detail {
 
 class Team {
  public:
-  /// The calling thread's team for a system of n particles: omp_get_max_threads() (`--threads`) threads,
-  /// but no more than one per `min_particles_per_thread()` particles; rebuilt when that number changes.
+  /// The calling thread's team for a system of n particles: the count a ThreadTuner chose for this thread
+  /// (`tuned_threads`, at most `most_threads_for`), or else `threads_for`. Teams are kept per size, so
+  /// switching between counts starts no threads.
   static Team& get(std::size_t particles);
   /// 8192, or the environment's PMFRAG_MIN_PARTICLES_PER_THREAD. Below it a thread's share of a step is a
-  /// few microseconds and waiting for the other threads costs more than it saves: on the project's 2-core
-  /// VM the (7,14) plate (2698 particles) ran 2.5-2.7e8 particle-steps/s on one thread and on two alike,
-  /// the 3-D block (54,940) 5.3-6.0e7 on one and 0.8-1.05e8 on two (docs/performance.md, session 7).
+  /// few microseconds, and whether a second thread pays depends on the machine at the moment (on the
+  /// project's 2-core VM the (7,14) plate ran 1.5x faster on two threads while both virtual cores were
+  /// free, 0.8x while the host kept one busy: docs/performance.md, session 9), so the static rule keeps
+  /// small systems on one thread and the tuner measures.
   static std::size_t min_particles_per_thread();
+  /// True if PMFRAG_MIN_PARTICLES_PER_THREAD or set_min_particles_per_thread() gave a value: the thread
+  /// count then follows that rule and is not tuned (tests and benchmarks that need a given count).
+  static bool thread_rule_fixed();
+  /// The static rule: omp_get_max_threads() (`--threads`), but at most one per min_particles_per_thread().
   static int threads_for(std::size_t particles);
+  /// The most threads worth trying: omp_get_max_threads(), at most one per block of `particle_grain`.
+  static int most_threads_for(std::size_t particles);
+  /// Sets the calling thread's tuned count (0: the static rule again).
+  static void set_tuned_threads(int threads);
 
   explicit Team(int threads);
   ~Team();

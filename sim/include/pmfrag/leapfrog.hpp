@@ -4,9 +4,15 @@
 
 #include "pmfrag/effects.hpp"
 
+#include <memory>
 #include <stdexcept>
+#include <vector>
 
 namespace pmfrag {
+
+namespace detail {
+class ThreadTuner;
+}
 
 struct GuardError : std::runtime_error {
   GuardError(const std::string& what, long step_, double time_, long particle_)
@@ -24,6 +30,8 @@ class Leapfrog {
   /// Takes the System's particles at t = 0, runs the effects' setup, and evaluates forces at r_0.
   /// `adaptive`: steps will vary (dt = "adaptive"), so time is summed rather than step x dt.
   Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>> effects, double dt, bool adaptive = false);
+  Leapfrog(Leapfrog&&) noexcept;
+  ~Leapfrog();
 
   /// One step k -> k+1: Eq. (12) at k = 0 (starter half step), Eq. (13) after, and Eq. (14) in one pass;
   /// then forces at r_{k+1}, so forces are always those of the current positions between steps.
@@ -52,6 +60,8 @@ class Leapfrog {
   State<D>& state() { return s_; }
   const State<D>& state() const { return s_; }
   const std::vector<std::unique_ptr<Effect<D>>>& effects() const { return effects_; }
+  /// Steps taken on each thread count (index: threads); the count is measured, not fixed (thread_tuner.hpp).
+  const std::vector<long>& thread_steps() const;
 
  private:
   void compute_forces(bool zeroed = false);
@@ -61,6 +71,7 @@ class Leapfrog {
   std::vector<double> inv_mass_dof_;  ///< 1/g per degree of freedom (N x D), for the flat update pass
   std::vector<double> max2_of_;       ///< each thread's largest squared component move in the last step
   bool uniform_ = true;  ///< every step so far had the same dt: time = step x dt exactly
+  std::unique_ptr<detail::ThreadTuner> tuner_;  ///< how many threads each step runs on
 };
 
 }  // namespace pmfrag

@@ -36,6 +36,14 @@ struct RunResult {
   bool completed = false;          ///< false: stopped by the guard or interrupted (message says why)
   bool interrupted = false;        ///< stopped by request_stop(): a checkpoint was written at that step
   std::string message;
+  std::vector<long> thread_steps;  ///< steps taken on each thread count (index: threads), as measured best
+  /// The thread count most steps ran on.
+  int threads() const {
+    std::size_t best = 1;
+    for (std::size_t t = 1; t < thread_steps.size(); ++t)
+      if (thread_steps[t] > thread_steps[best]) best = t;
+    return static_cast<int>(best);
+  }
   double particle_steps_per_s() const { return wall_s > 0 ? static_cast<double>(particles) * steps / wall_s : 0.0; }
 };
 
@@ -46,11 +54,14 @@ struct UnstableStepError : std::runtime_error {
 
 RunResult run_scene(const Scene& scene, const RunOptions& options);
 
-/// The step kernels give each thread at least this many particles (default 8192, or the environment's
-/// PMFRAG_MIN_PARTICLES_PER_THREAD): below that, waiting for each other costs the threads more than they
-/// share (docs/performance.md). 1 splits any system among all threads (the 1-vs-2-threads tests use it).
+/// By default a run measures how many threads its steps run fastest on (1, 2, 4, ... up to
+/// omp_get_max_threads(), each thread with at least 256 particles) and re-measures every so often; the
+/// trajectory is bitwise the same for any count. Setting this (or the environment's
+/// PMFRAG_MIN_PARTICLES_PER_THREAD) fixes the count instead: all threads, but at most one per `particles`
+/// particles. 1 splits any system among all threads (the 1-vs-2-threads tests use it); 0 measures again.
 void set_min_particles_per_thread(std::size_t particles);
-/// How many threads the step kernels use for a system of this many particles under the current settings.
+/// How many threads the step kernels use for a system of this many particles when the count is not
+/// measured: outside a run's steps, or with set_min_particles_per_thread().
 int step_threads(std::size_t particles);
 
 /// Asks a running simulation to stop at the end of its current step, write a checkpoint and return

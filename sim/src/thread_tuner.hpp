@@ -1,0 +1,92 @@
+// How many threads a step runs on, chosen by measuring. Whether a second thread pays for a small body
+// depends on the machine at the moment, not only on the body: on the project's 2-core VM the (7,14) plate
+// (2698 particles, ~10 us a step) ran 1.5x faster on two threads while both virtual cores were free and
+// 0.8x as fast while the host kept one of them busy (docs/performance.md, session 9). Every particle's force
+// is summed in a fixed order, so the trajectory is bitwise the same whatever count is chosen: the choice may
+// follow the clock without costing reproducibility.
+//
+// Every so often the tuner runs a short window of steps on each candidate count (1, 2, 4, ... up to the
+// most the body can use), takes the median time of a step in each (a neighbour-list rebuild or a frame
+// written between steps does not sway it), and holds the fastest until the next probe. Only probe windows
+// read the clock.
+#pragma once
+
+#include "team.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstddef>
+#include <vector>
+
+namespace pmfrag::detail {
+
+class ThreadTuner {
+ public:
+  explicit ThreadTuner(std::size_t particles) {
+    if (Team::thread_rule_fixed()) return;
+    for (int t = 1; t <= Team::most_threads_for(particles); t *= 2) candidates_.push_back(t);
+    if (candidates_.size() < 2) candidates_.clear();
+    per_step_.assign(candidates_.size(), 0.0);
+  }
+  ~ThreadTuner() { Team::set_tuned_threads(0); }
+  ThreadTuner(const ThreadTuner&) = delete;
+  ThreadTuner& operator=(const ThreadTuner&) = delete;
+
+  bool active() const { return !candidates_.empty(); }
+
+  /// Before a step: sets the calling thread's thread count for it, and starts the clock in a probe window.
+  void before_step() {
+    // (set every step: another integrator on this thread may have set its own count)
+    Team::set_tuned_threads(!active() ? 0 : holding_ > 0 ? best_ : candidates_[probe_]);
+    if (!active()) return;
+    if (holding_ == 0 && count_ >= warm_steps) start_ = clock::now();
+  }
+
+  /// After the step.
+  void after_step(int threads_used) {
+    const std::size_t k = static_cast<std::size_t>(threads_used);
+    if (steps_with_.size() <= k) steps_with_.resize(k + 1, 0);
+    ++steps_with_[k];
+    if (!active()) return;
+    if (holding_ > 0) {
+      --holding_;
+      return;
+    }
+    if (count_ >= warm_steps) times_.push_back(std::chrono::duration<double>(clock::now() - start_).count());
+    if (++count_ < window_) return;
+    // the window on candidate probe_ is over: its median step
+    std::nth_element(times_.begin(), times_.begin() + static_cast<std::ptrdiff_t>(times_.size() / 2), times_.end());
+    per_step_[probe_] = times_[times_.size() / 2];
+    times_.clear();
+    count_ = 0;
+    if (++probe_ < candidates_.size()) return;
+    probe_ = 0;
+    const std::size_t b = static_cast<std::size_t>(std::min_element(per_step_.begin(), per_step_.end()) - per_step_.begin());
+    best_ = candidates_[b];
+    // Windows of ~2 ms of steps (at least 32), and ~64 windows between probes: the probe of a count slower by
+    // half costs under 1 % of the run.
+    const double step = std::max(per_step_[b], 1e-9);
+    window_ = warm_steps + std::clamp(static_cast<long>(2e-3 / step), 32L, 2048L);
+    holding_ = 64 * window_;
+  }
+
+  /// Steps run with each thread count (index: threads).
+  const std::vector<long>& steps_with() const { return steps_with_; }
+
+ private:
+  using clock = std::chrono::steady_clock;
+  // steps at the start of a window left out of the timing: a team that has slept, its first plan, caches
+  static constexpr long warm_steps = 8;
+  std::vector<int> candidates_;
+  std::vector<double> per_step_;  ///< s: each candidate's median step in the last probe
+  std::vector<double> times_;     ///< s: the steps timed in this window
+  std::vector<long> steps_with_;
+  std::size_t probe_ = 0;  ///< the candidate being probed
+  long count_ = 0;         ///< steps into this window
+  long window_ = warm_steps + 64;
+  long holding_ = 0;  ///< steps left on best_ before the next probe
+  int best_ = 1;
+  clock::time_point start_;
+};
+
+}  // namespace pmfrag::detail
