@@ -254,7 +254,7 @@ class PairEffect final : public Effect<D> {
         f1[u] = fr * d1;
         if constexpr (D == 3) f2[u] = fr * d2;
       }
-      if (nt > 1) team.barrier();  // the gather reads every thread's pair forces
+      if (nt > 1) team.barrier(tid);  // the gather reads every thread's pair forces
       list_.gather(f, tid, nt);
     };
     if (detail::Team::threads_for(static_cast<std::size_t>(m)) == 1)

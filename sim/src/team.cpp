@@ -73,24 +73,27 @@ Team& Team::get(std::size_t particles) {
   return *teams[k];
 }
 
-Team::Team(int threads) : size_(std::max(1, threads)) {
+Team::Team(int threads)
+    : size_(std::max(1, threads)), done_(new Counter[static_cast<std::size_t>(size_)]),
+      passed_(new Counter[static_cast<std::size_t>(size_)]) {
   for (int t = 1; t < size_; ++t) workers_.emplace_back([this, t] { work(t); });
 }
 
 Team::~Team() {
-  stop_ = true;
-  generation_.fetch_add(1, std::memory_order_release);
-  generation_.notify_all();
+  job_.stop = true;
+  job_.generation.fetch_add(1, std::memory_order_release);
+  job_.generation.notify_all();
   for (auto& w : workers_) w.join();
 }
 
 void Team::dispatch(Fn fn, void* ctx) {
-  fn_ = fn, ctx_ = ctx;
-  finished_.store(0, std::memory_order_relaxed);
-  generation_.fetch_add(1, std::memory_order_release);  // publishes fn_, ctx_
-  generation_.notify_all();                               // wakes only workers that went to sleep
+  job_.fn = fn, job_.ctx = ctx;
+  const std::uint32_t g = job_.generation.load(std::memory_order_relaxed) + 1;
+  job_.generation.store(g, std::memory_order_release);  // publishes fn, ctx
+  job_.generation.notify_all();                         // wakes only workers that went to sleep
   fn(ctx, 0);
-  spin_until([&] { return finished_.load(std::memory_order_acquire) == size_ - 1; });
+  for (int t = 1; t < size_; ++t)
+    spin_until([&] { return done_[static_cast<std::size_t>(t)].value.load(std::memory_order_acquire) == g; });
 }
 
 void Team::work(int tid) {
@@ -99,27 +102,26 @@ void Team::work(int tid) {
     // Spin for the next job, then sleep on the generation counter (a futex) until one is handed out.
     int k = 0;
     std::uint32_t g;
-    while ((g = generation_.load(std::memory_order_acquire)) == seen) {
+    while ((g = job_.generation.load(std::memory_order_acquire)) == seen) {
       if (++k < spin_rounds)
         PMFRAG_PAUSE();
       else
-        generation_.wait(seen, std::memory_order_acquire);
+        job_.generation.wait(seen, std::memory_order_acquire);
     }
     seen = g;
-    if (stop_) return;
-    fn_(ctx_, tid);
-    finished_.fetch_add(1, std::memory_order_acq_rel);
+    if (job_.stop) return;
+    job_.fn(job_.ctx, tid);
+    done_[static_cast<std::size_t>(tid)].value.store(g, std::memory_order_release);
   }
 }
 
-void Team::barrier() {
-  const std::uint32_t pass = passed_.load(std::memory_order_acquire);
-  if (arrived_.fetch_add(1, std::memory_order_acq_rel) == size_ - 1) {
-    arrived_.store(0, std::memory_order_relaxed);
-    passed_.fetch_add(1, std::memory_order_release);
-  } else {
-    spin_until([&] { return passed_.load(std::memory_order_acquire) != pass; });
-  }
+void Team::barrier(int tid) {
+  Counter& mine = passed_[static_cast<std::size_t>(tid)];
+  const std::uint64_t pass = mine.value.load(std::memory_order_relaxed) + 1;
+  mine.value.store(pass, std::memory_order_release);
+  for (int t = 0; t < size_; ++t)
+    if (t != tid)
+      spin_until([&] { return passed_[static_cast<std::size_t>(t)].value.load(std::memory_order_acquire) >= pass; });
 }
 
 }  // namespace pmfrag::detail

@@ -57,23 +57,32 @@ class Team {
     dispatch([](void* ctx, int tid) { (*static_cast<B*>(ctx))(tid); }, &body);
   }
 
-  /// All threads of the team wait here until every one has arrived (call only inside `run`).
-  void barrier();
+  /// All threads of the team wait here until every one has arrived (call only inside `run`, with the
+  /// thread's tid).
+  void barrier(int tid);
 
  private:
   using Fn = void (*)(void*, int);
   void dispatch(Fn fn, void* ctx);
   void work(int tid);
 
+  // Every cache line is written by one thread only, and a worker learns of a job from one line: between
+  // two virtual cores a line costs 150-600 ns to move on this VM (a worker started 300-1,200 cycles after
+  // the job was handed out, session 9), and the first version moved four or five per job.
+  struct alignas(64) Job {
+    std::atomic<std::uint32_t> generation{0};  ///< bumped to hand out a job (or to stop)
+    Fn fn = nullptr;
+    void* ctx = nullptr;
+    bool stop = false;
+  };
+  struct alignas(64) Counter {
+    std::atomic<std::uint64_t> value{0};
+  };
   int size_ = 1;
+  Job job_;                          ///< written by the caller
+  std::unique_ptr<Counter[]> done_;  ///< per worker: the generation it last finished (written by it)
+  std::unique_ptr<Counter[]> passed_;  ///< per thread: barriers it has reached (written by it)
   std::vector<std::thread> workers_;
-  Fn fn_ = nullptr;
-  void* ctx_ = nullptr;
-  alignas(64) std::atomic<std::uint32_t> generation_{0};  ///< bumped to hand out a job (or to stop)
-  alignas(64) std::atomic<int> finished_{0};               ///< workers done with the current job
-  alignas(64) std::atomic<int> arrived_{0};                ///< barrier: threads arrived
-  alignas(64) std::atomic<std::uint32_t> passed_{0};       ///< barrier: generations passed
-  bool stop_ = false;
 };
 
 /// Thread tid's share [begin, end) of n items, in multiples of `grain` (except the last).
@@ -85,12 +94,16 @@ inline std::pair<long, long> share(long n, int tid, int threads, long grain = 1)
   return {std::min(n, b * grain), std::min(n, e * grain)};
 }
 
-/// Thread tid's particles [begin, end). Every per-particle kernel of a step uses this one partition, so
-/// each thread finds the positions, velocities and forces it touches in its own core's cache. 256 is the
-/// assembly block of the bond stencil and a multiple of every vector width.
+/// The assembly block of the bond stencil (a multiple of every vector width); a thread gets at least one.
 inline constexpr long particle_grain = 256;
+/// Thread tid's particles [begin, end). Every per-particle kernel of a step uses this one partition, so
+/// each thread finds the positions, velocities and forces it touches in its own core's cache. Shares
+/// start on multiples of 64 particles (whole cache lines, whole vectors): in blocks of 256 the (7,14)
+/// plate's 2698 particles split 1536 / 1162, and the first thread's bond pass took 11,800 cycles a step
+/// against the second's 8,600 (measured, session 9).
+inline constexpr long share_grain = 64;
 inline std::pair<long, long> particle_share(long n, int tid, int threads) {
-  return share(n, tid, threads, particle_grain);
+  return share(n, tid, threads, share_grain);
 }
 
 /// body(first, last, tid) on every thread of the team for n particles, each with its particle_share.
