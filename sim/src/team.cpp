@@ -31,26 +31,25 @@ void spin_until(Done&& done) {
 }
 
 constexpr std::size_t default_min_particles = 8192;
-long env_min_particles() {
-  const char* env = std::getenv("PMFRAG_MIN_PARTICLES_PER_THREAD");
-  return env ? std::atol(env) : 0;
-}
-std::atomic<std::size_t>& min_particles_setting() {
-  static std::atomic<std::size_t> m{env_min_particles() > 0 ? static_cast<std::size_t>(env_min_particles())
-                                                             : default_min_particles};
+// PMFRAG_MIN_PARTICLES_PER_THREAD or set_min_particles_per_thread(); 0: not given (the count is measured)
+std::atomic<std::size_t>& min_particles_given() {
+  static std::atomic<std::size_t> m{[] {
+    const char* env = std::getenv("PMFRAG_MIN_PARTICLES_PER_THREAD");
+    const long v = env ? std::atol(env) : 0;
+    return v > 0 ? static_cast<std::size_t>(v) : std::size_t{0};
+  }()};
   return m;
-}
-std::atomic<bool>& rule_fixed() {
-  static std::atomic<bool> fixed{env_min_particles() > 0};
-  return fixed;
 }
 thread_local int tuned = 0;
 
 int max_threads() { return std::max(1, omp_get_max_threads()); }
 }  // namespace
 
-std::size_t Team::min_particles_per_thread() { return min_particles_setting().load(std::memory_order_relaxed); }
-bool Team::thread_rule_fixed() { return rule_fixed().load(std::memory_order_relaxed); }
+std::size_t Team::min_particles_per_thread() {
+  const std::size_t given = min_particles_given().load(std::memory_order_relaxed);
+  return given > 0 ? given : default_min_particles;
+}
+bool Team::thread_rule_fixed() { return min_particles_given().load(std::memory_order_relaxed) > 0; }
 
 int Team::threads_for(std::size_t particles) {
   const std::size_t fit = std::max<std::size_t>(1, particles / min_particles_per_thread());
@@ -127,9 +126,6 @@ void Team::barrier(int tid) {
 }  // namespace pmfrag::detail
 
 namespace pmfrag {
-void set_min_particles_per_thread(std::size_t n) {
-  detail::min_particles_setting().store(n > 0 ? n : detail::default_min_particles);
-  detail::rule_fixed().store(n > 0);
-}
+void set_min_particles_per_thread(std::size_t n) { detail::min_particles_given().store(n); }
 int step_threads(std::size_t particles) { return detail::Team::threads_for(particles); }
 }  // namespace pmfrag

@@ -20,10 +20,10 @@ namespace pmfrag::detail {
 class Team {
  public:
   /// The calling thread's team for a system of n particles: the count a ThreadTuner chose for this thread
-  /// (`tuned_threads`, at most `most_threads_for`), or else `threads_for`. Teams are kept per size, so
+  /// (`set_tuned_threads`, at most `most_threads_for`), or else `threads_for`. Teams are kept per size, so
   /// switching between counts starts no threads.
   static Team& get(std::size_t particles);
-  /// 8192, or the environment's PMFRAG_MIN_PARTICLES_PER_THREAD. Below it a thread's share of a step is a
+  /// 8192, or PMFRAG_MIN_PARTICLES_PER_THREAD / set_min_particles_per_thread(). Below it a thread's share of a step is a
   /// few microseconds, and whether a second thread pays depends on the machine at the moment (on the
   /// project's 2-core VM the (7,14) plate ran 1.5x faster on two threads while both virtual cores were
   /// free, 0.8x while the host kept one busy: docs/performance.md, session 9), so the static rule keeps
