@@ -171,11 +171,13 @@ class BondStencil {
     }
     PairTable<D> sparse;                 ///< off-stencil bonds touching [pb, pe), in ascending global order
     std::vector<int> sparse_id;          ///< their index among all off-stencil bonds (for `alive`)
-    std::vector<std::uint8_t> sparse_alive;
+    std::vector<std::uint8_t, AlignedAllocator<std::uint8_t>> sparse_alive;
     long xlo = 0, xhi = 0;  ///< the particles whose positions this thread reads
     std::vector<double, AlignedAllocator<double>> xs[D];  ///< their positions by component, from xlo
-    std::vector<std::size_t> first_run, next_run;  ///< per group: the first run the thread sweeps; the
-                                                   ///< first not yet swept this step
+    /// per group: the first run the thread sweeps; the first not yet swept this step (written by the
+    /// thread, in lines of its own)
+    std::vector<std::size_t> first_run;
+    std::vector<std::size_t, AlignedAllocator<std::size_t>> next_run;
   };
 
   // Each thread's share of particles, its sweep buffers (zeros where no bond is ever evaluated: before
@@ -212,7 +214,7 @@ class BondStencil {
             std::lower_bound(g.runs.begin(), g.runs.end(), from, [](const auto& run, long i) { return run.second <= i; }) -
             g.runs.begin()));
       }
-      w.next_run = w.first_run;
+      w.next_run.assign(w.first_run.begin(), w.first_run.end());
     }
     return work;
   }
@@ -225,7 +227,7 @@ class BondStencil {
     for (std::size_t u = 0; u < w.sparse_id.size(); ++u)
       w.sparse_alive[u] = sparse_alive_[static_cast<std::size_t>(w.sparse_id[u])];
     if (w.sparse.size() > 0) sparse_pass<Real>(w, law.with_ids(w.sparse.law.data()), cut2, inv_rmin, broke);
-    w.next_run = w.first_run;
+    std::copy(w.first_run.begin(), w.first_run.end(), w.next_run.begin());
     // The bonds (i, i + o) with i < pb whose second particle is ours (none before particle 0: zeros).
     for (std::size_t g = 0; g < groups_.size(); ++g) {
       zero(w, g, w.pb - groups_[g].offset, std::min(0L, w.pb));

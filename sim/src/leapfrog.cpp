@@ -13,6 +13,8 @@ namespace pmfrag {
 
 namespace {
 
+constexpr std::size_t line_doubles = 8;  // doubles in a cache line
+
 struct Kick {
   long bad;     ///< components that moved more than the component limit (or are not finite)
   double max2;  ///< cm^2: the largest squared component move
@@ -61,6 +63,7 @@ Leapfrog<D>::Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>>
   }
   for (auto& e : effects_) {
     const unsigned st = e->stages();
+    if (st & stage::fused_force) fused_force_.push_back(e.get());
     if (st & stage::force) force_.push_back(e.get());
     if (st & stage::after_move) after_move_.push_back(e.get());
     if (st & stage::observe) observe_.push_back(e.get());
@@ -84,8 +87,9 @@ const std::vector<long>& Leapfrog<D>::thread_steps() const {
 }
 
 template <int D>
-void Leapfrog<D>::compute_forces(bool zeroed) {
-  if (!zeroed) std::fill(s_.f.begin(), s_.f.end(), V::Zero());
+void Leapfrog<D>::compute_forces() {
+  std::fill(s_.f.begin(), s_.f.end(), V::Zero());
+  for (auto* e : fused_force_) e->add_fused_forces(s_);
   for (auto* e : force_) e->add_forces(s_);
 }
 
@@ -113,14 +117,26 @@ void Leapfrog<D>::step(double dt) {
   double* const fp = s_.f.front().data();
   const double* const mp = inv_mass_dof_.data();
   tuner_->before_step();
-  const int threads = detail::Team::get(s_.size()).size();
+  detail::Team& team = detail::Team::get(s_.size());
+  const int threads = team.size();
   std::atomic<long> bad_total{0};
-  max2_of_.assign(static_cast<std::size_t>(threads), 0.0);
-  detail::for_particles(s_.size(), [&](long first, long last, int tid) {
+  max2_of_.resize(static_cast<std::size_t>(threads) * line_doubles, 0.0);  // every thread writes its entry
+  // The move is handed to the team's next pass: the fused forces' (the bonds') if any, so the two cost one
+  // hand-out (team.hpp). Each thread moves its own particle_share, the particles whose forces it assembles.
+  auto kick = [&](int tid) {
+    const auto [first, last] = detail::particle_share(n, tid, threads);
     const Kick k = kick_drift(xp, vp, fp, mp, first * D, last * D, h, dt, component_limit2);
     if (k.bad > 0) bad_total.fetch_add(k.bad, std::memory_order_relaxed);
-    max2_of_[static_cast<std::size_t>(tid)] = k.max2;
-  });
+    max2_of_[static_cast<std::size_t>(tid) * line_doubles] = k.max2;  // a line per thread
+  };
+  team.defer(kick);
+  try {
+    for (auto* e : fused_force_) e->add_fused_forces(s_);
+  } catch (...) {
+    team.discard();  // the kick lives in this frame
+    throw;
+  }
+  team.flush();
   const long bad = bad_total.load();
   const double max2 = *std::max_element(max2_of_.begin(), max2_of_.end());
   if (bad > 0) {
@@ -144,7 +160,7 @@ void Leapfrog<D>::step(double dt) {
   s_.t = uniform_ ? static_cast<double>(s_.step) * dt : s_.t + dt;
   const double max_step = std::sqrt(D * max2);
   for (auto* e : after_move_) e->after_move(s_, max_step);
-  compute_forces(true);
+  for (auto* e : force_) e->add_forces(s_);  // f was zeroed by the move, and holds the fused forces
   tuner_->after_step(threads);
 }
 

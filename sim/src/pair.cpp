@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace pmfrag {
 
@@ -55,7 +56,8 @@ class PairEffect final : public Effect<D> {
 
   std::string name() const override { return spec_.model == PairModel::bonded ? "pair (bonded)" : "pair (cutoff)"; }
   unsigned stages() const override {
-    return stage::setup | stage::force | stage::observe | stage::step_limit | (uses_list_ ? stage::after_move : 0u);
+    return stage::setup | stage::force | stage::observe | stage::step_limit | (uses_list_ ? stage::after_move : 0u) |
+           (spec_.model == PairModel::bonded ? stage::fused_force : 0u);
   }
 
   void setup(State<D>& s) override {
@@ -76,12 +78,20 @@ class PairEffect final : public Effect<D> {
     if (uses_list_) rebuild(s);
   }
 
+  // The bonds read positions and which bonds are intact, nothing the neighbour list keeps: they are summed
+  // in the pass that moves the particles (Leapfrog::step). Bonds found too long are retired in add_forces,
+  // after the guard has accepted the step.
+  void add_fused_forces(State<D>& s) override {
+    const double cut2 = cutoff_ * cutoff_;
+    broke_ = detail::with_law(laws_, nphase_ == 1, [&](const auto& law) {
+      return stencil_.add_forces(s.x.front().data(), s.f.front().data(), law, cut2, inv_rmin_);
+    });
+  }
+
   void add_forces(State<D>& s) override {
     const double cut2 = cutoff_ * cutoff_;
     if (spec_.model == PairModel::bonded) {
-      const long broke = detail::with_law(laws_, nphase_ == 1, [&](const auto& law) {
-        return stencil_.add_forces(s.x.front().data(), s.f.front().data(), law, cut2, inv_rmin_);
-      });
+      const long broke = std::exchange(broke_, 0);
       if (broke > 0) {
         retire_broken(s);
         // A pair whose bond just broke must repel as a contact from the next step on: rebuild the list then
@@ -386,6 +396,7 @@ class PairEffect final : public Effect<D> {
   std::vector<int> bi_, bj_, blaw_;  ///< original bonds (i < j) and their law
   std::vector<std::uint8_t> alive_;
   std::vector<double> phi_break_;
+  long broke_ = 0;  ///< bonds the last add_fused_forces found too long (retired by add_forces)
   long first_break_step_ = -1;
   double first_break_time_ = -1.0;
   std::vector<double> law_mass_;  ///< g: the lightest particle a law acts on (Eq. 15 takes the smallest m)

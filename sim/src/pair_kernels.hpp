@@ -2,6 +2,8 @@
 // inlined; the paper's three laws get compile-time exponents) and a pair table with a per-particle gather.
 #pragma once
 
+#include "aligned.hpp"
+
 #include "pmfrag/pair_law.hpp"
 #include "team.hpp"
 
@@ -99,7 +101,7 @@ template <int D>
 struct PairTable {
   using V = Eigen::Matrix<double, D, 1>;
   std::vector<int> i, j, law;
-  std::vector<double> force[D];    ///< components of the force on i (j gets the opposite)
+  std::vector<double, AlignedAllocator<double>> force[D];  ///< components of the force on i (j gets the opposite)
   std::vector<int> offset, entry;  ///< CSR: entry = pair << 1 | (particle is j)
   std::vector<int> touched;        ///< particles with at least one pair (the gather visits only these)
 

@@ -86,11 +86,13 @@ Team::~Team() {
 }
 
 void Team::dispatch(Fn fn, void* ctx) {
+  job_.pre = pre_fn_, job_.pre_ctx = pre_ctx_;
+  pre_fn_ = nullptr;
   job_.fn = fn, job_.ctx = ctx;
   const std::uint32_t g = job_.generation.load(std::memory_order_relaxed) + 1;
-  job_.generation.store(g, std::memory_order_release);  // publishes fn, ctx
+  job_.generation.store(g, std::memory_order_release);  // publishes the job
   job_.generation.notify_all();                         // wakes only workers that went to sleep
-  fn(ctx, 0);
+  perform(job_, 0);
   for (int t = 1; t < size_; ++t)
     spin_until([&] { return done_[static_cast<std::size_t>(t)].value.load(std::memory_order_acquire) == g; });
 }
@@ -109,7 +111,7 @@ void Team::work(int tid) {
     }
     seen = g;
     if (job_.stop) return;
-    job_.fn(job_.ctx, tid);
+    perform(job_, tid);
     done_[static_cast<std::size_t>(tid)].value.store(g, std::memory_order_release);
   }
 }

@@ -47,6 +47,9 @@ inline constexpr unsigned force = 1u << 1;       ///< add forces at r_k (in atta
 inline constexpr unsigned after_move = 1u << 2;  ///< after r_{k+1} is known (neighbour lists)
 inline constexpr unsigned observe = 1u << 3;     ///< contribute to Observables on output steps
 inline constexpr unsigned step_limit = 1u << 4;  ///< bound the next step (called only for dt = "adaptive")
+/// forces at r_k that read only positions and the effect's own state, not what after_move maintains (the
+/// bonds of the bonded model): evaluated before the other stages, in the same thread-team pass as the move
+inline constexpr unsigned fused_force = 1u << 5;
 }  // namespace stage
 
 template <int D>
@@ -58,6 +61,10 @@ class Effect {
   virtual unsigned stages() const = 0;
   virtual void setup(State<D>&) {}
   virtual void add_forces(State<D>&) {}
+  /// stage::fused_force: adds forces at r_k (already moved to, but s.step, s.t not yet advanced; may run
+  /// on positions the guard then rejects, so it changes nothing but s.f and buffers of its own: what
+  /// follows from those forces, e.g. retiring broken bonds, waits for add_forces).
+  virtual void add_fused_forces(State<D>&) {}
   /// `max_step` bounds how far any particle moved in this step [cm] (a cheap bound for Verlet lists).
   virtual void after_move(State<D>&, double /*max_step*/) {}
   virtual void observe(const State<D>&, Observables&) const {}

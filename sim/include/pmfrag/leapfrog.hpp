@@ -64,10 +64,10 @@ class Leapfrog {
   const std::vector<long>& thread_steps() const;
 
  private:
-  void compute_forces(bool zeroed = false);
+  void compute_forces();  ///< all forces at r_k, from zero
   State<D> s_;
   std::vector<std::unique_ptr<Effect<D>>> effects_;
-  std::vector<Effect<D>*> force_, after_move_, observe_, step_limit_;
+  std::vector<Effect<D>*> fused_force_, force_, after_move_, observe_, step_limit_;
   std::vector<double> inv_mass_dof_;  ///< 1/g per degree of freedom (N x D), for the flat update pass
   std::vector<double> max2_of_;       ///< each thread's largest squared component move in the last step
   bool uniform_ = true;  ///< every step so far had the same dt: time = step x dt exactly
