@@ -6,9 +6,12 @@
 // follow the clock without costing reproducibility.
 //
 // Every so often the tuner runs a short window of steps on each candidate count (1, 2, 4, ... up to the
-// most the body can use), takes the median time of a step in each (a neighbour-list rebuild or a frame
-// written between steps does not sway it), and holds the fastest until the next probe. Only probe windows
-// read the clock.
+// most the body can use), takes the mean time of a step in each with the slowest 1/16 of steps left out
+// (a neighbour-list rebuild or a frame written between steps does not sway it), and holds the fastest until
+// the next probe. Not the median: on this VM a two-thread step of the plate had a median of 17,700 cycles
+// and a mean of 22,400 (the worker now and then starts or finishes thousands of cycles late, in one step
+// of ten or more; rdtsc, session 10), so the median chose two threads where one ran as fast. Only probe
+// windows read the clock.
 #pragma once
 
 #include "team.hpp"
@@ -54,9 +57,12 @@ class ThreadTuner {
     }
     if (count_ >= warm_steps) times_.push_back(std::chrono::duration<double>(clock::now() - start_).count());
     if (++count_ < window_) return;
-    // the window on candidate probe_ is over: its median step
-    std::nth_element(times_.begin(), times_.begin() + static_cast<std::ptrdiff_t>(times_.size() / 2), times_.end());
-    per_step_[probe_] = times_[times_.size() / 2];
+    // the window on candidate probe_ is over: its mean step, the slowest 1/16 left out
+    const std::size_t kept = times_.size() - times_.size() / 16;
+    std::nth_element(times_.begin(), times_.begin() + static_cast<std::ptrdiff_t>(kept), times_.end());
+    double sum = 0.0;
+    for (std::size_t j = 0; j < kept; ++j) sum += times_[j];
+    per_step_[probe_] = sum / static_cast<double>(kept);
     times_.clear();
     count_ = 0;
     if (++probe_ < candidates_.size()) return;
@@ -78,7 +84,7 @@ class ThreadTuner {
   // steps at the start of a window left out of the timing: a team that has slept, its first plan, caches
   static constexpr long warm_steps = 8;
   std::vector<int> candidates_;
-  std::vector<double> per_step_;  ///< s: each candidate's median step in the last probe
+  std::vector<double> per_step_;  ///< s: each candidate's (trimmed) mean step in the last probe
   std::vector<double> times_;     ///< s: the steps timed in this window
   std::vector<long> steps_with_;
   std::size_t probe_ = 0;  ///< the candidate being probed
