@@ -99,13 +99,13 @@ class Team {
     void* ctx = nullptr;
   };
   static_assert(sizeof(Job) == 64);
-  /// Runs the job (pre, barrier, fn) as thread tid.
+  /// Runs the job as thread tid: the prologue, then (after a barrier) the body. A prologue alone needs no
+  /// barrier: the caller's wait for the workers to finish is one.
   void perform(const Job& job, int tid) {
-    if (job.pre != nullptr) {
-      job.pre(job.pre_ctx, tid);
-      barrier(tid);
-    }
-    if (job.fn != nullptr) job.fn(job.ctx, tid);
+    if (job.pre != nullptr) job.pre(job.pre_ctx, tid);
+    if (job.fn == nullptr) return;
+    if (job.pre != nullptr) barrier(tid);
+    job.fn(job.ctx, tid);
   }
   struct alignas(64) Counter {
     std::atomic<std::uint64_t> value{0};
