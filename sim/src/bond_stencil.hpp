@@ -130,25 +130,40 @@ class BondStencil {
   long add_forces(const double* x, double* f, const Law& law, double cut2, double inv_rmin) {
     std::atomic<long> broke{0};
     Team& team = Team::get(n_);
-    const std::size_t threads = static_cast<std::size_t>(team.size());
-    if (plans_.size() <= threads) plans_.resize(threads + 1);
-    if (plans_[threads].empty()) plans_[threads] = plan(team.size());
-    std::vector<Work>& work = plans_[threads];
+    prepare(team.bounds(static_cast<long>(n_)));
     team.run([&](int tid) {
-      Work& w = work[static_cast<std::size_t>(tid)];
-      // Each thread copies the positions it reads (its particles and their partners) by component: no
-      // thread waits for another.
-      for (long p = w.xlo; p < w.xhi; ++p)
-        for (int c = 0; c < D; ++c)
-          w.xs[c][static_cast<std::size_t>(p - w.xlo)] = x[static_cast<std::size_t>(p) * D + static_cast<std::size_t>(c)];
-      long mine = 0;
-      if (single_)
-        mine = forces_of<float>(w, law, cut2, inv_rmin, f);
-      else
-        mine = forces_of<double>(w, law, cut2, inv_rmin, f);
+      const long mine = add_forces_of(tid, x, f, law, cut2, inv_rmin);
       if (mine > 0) broke.fetch_add(mine, std::memory_order_relaxed);
     });
     return broke.load();
+  }
+
+  /// Readies the work of the partition `bounds` (Team::bounds; planned on first use, the last few kept):
+  /// call before add_forces_of, outside the team.
+  void prepare(const std::vector<long>& bounds) {
+    for (std::size_t k = 0; k < plans_.size(); ++k)
+      if (plans_[k].first == bounds) {
+        current_ = k;
+        return;
+      }
+    // The team rebalances its shares by a grain now and then, back and forth: a few plans cover that.
+    constexpr std::size_t kept = 6;
+    if (plans_.size() == kept) plans_.erase(plans_.begin());
+    plans_.emplace_back(bounds, plan(bounds));
+    current_ = plans_.size() - 1;
+  }
+
+  /// Thread tid's part of add_forces (the forces on its share of the prepared partition), inside a team
+  /// pass. Returns this thread's count of bonds found too long.
+  template <class Law>
+  long add_forces_of(int tid, const double* x, double* f, const Law& law, double cut2, double inv_rmin) {
+    Work& w = plans_[current_].second[static_cast<std::size_t>(tid)];
+    // Each thread copies the positions it reads (its particles and their partners) by component: no
+    // thread waits for another.
+    for (long p = w.xlo; p < w.xhi; ++p)
+      for (int c = 0; c < D; ++c)
+        w.xs[c][static_cast<std::size_t>(p - w.xlo)] = x[static_cast<std::size_t>(p) * D + static_cast<std::size_t>(c)];
+    return single_ ? forces_of<float>(w, law, cut2, inv_rmin, f) : forces_of<double>(w, law, cut2, inv_rmin, f);
   }
 
  private:
@@ -182,12 +197,13 @@ class BondStencil {
 
   // Each thread's share of particles, its sweep buffers (zeros where no bond is ever evaluated: before
   // particle 0 and past n - offset) and its off-stencil bonds.
-  std::vector<Work> plan(int threads) const {
-    std::vector<Work> work(static_cast<std::size_t>(threads));
+  std::vector<Work> plan(const std::vector<long>& bounds) const {
+    const std::size_t threads = bounds.size() - 1;
+    std::vector<Work> work(threads);
     const long n = static_cast<long>(n_);
-    for (int t = 0; t < threads; ++t) {
-      Work& w = work[static_cast<std::size_t>(t)];
-      std::tie(w.pb, w.pe) = particle_share(n, t, threads);
+    for (std::size_t t = 0; t < threads; ++t) {
+      Work& w = work[t];
+      w.pb = bounds[t], w.pe = bounds[t + 1];
       // the ring, its repeated first block, and one cache line more: R and 256 are even numbers of cache
       // lines, so the stride is odd and the 64-byte aligned rows do not all fall into the same L1 sets
       w.stride = ring_ + particle_grain + 8;
@@ -399,7 +415,8 @@ class BondStencil {
   std::vector<int> sparse_i_, sparse_j_, sparse_law_;  ///< off-stencil bonds
   std::vector<std::uint8_t> sparse_alive_;
   std::vector<std::pair<int, int>> loc_;  ///< bond -> (group or -1 for off-stencil, index)
-  std::vector<std::vector<Work>> plans_;  ///< by team size: per thread, planned on first use
+  std::vector<std::pair<std::vector<long>, std::vector<Work>>> plans_;  ///< by partition: per thread
+  std::size_t current_ = 0;  ///< the prepared plan
 };
 
 }  // namespace pmfrag::detail

@@ -3,6 +3,7 @@
 
 #include "team.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace pmfrag {
@@ -28,21 +29,39 @@ class Kinematic final : public Effect<D> {
   using V = Eigen::Matrix<double, D, 1>;
   Kinematic(const System& sys, const KinematicSpec& spec, std::size_t index)
       : u_(head<D>(spec.velocity)),
-        index_(select_particles(sys, spec.select, "kinematic[" + std::to_string(index) + "].select")) {}
+        index_(select_particles(sys, spec.select, "kinematic[" + std::to_string(index) + "].select")) {
+    // g is summed by blocks of share_grain particles, each block in index order, then the blocks in order:
+    // the thread owning a block can sum it in a resident step (the team's shares are whole blocks), and g
+    // has the same bits whoever summed which block.
+    std::sort(index_.begin(), index_.end());
+    for (std::size_t k = 0; k < index_.size(); ++k) {
+      const long block = index_[k] / detail::share_grain;
+      if (block_.empty() || block_.back() != block) block_.push_back(block), block_from_.push_back(k);
+    }
+    block_from_.push_back(index_.size());
+    partial_.assign(block_.size() * 8, 0.0);  // a cache line per block: written by its thread
+  }
   std::string name() const override { return "kinematic"; }
-  unsigned stages() const override { return stage::setup | stage::force | stage::observe; }
+  unsigned stages() const override { return stage::setup | stage::force | stage::observe | stage::resident; }
   void setup(State<D>& s) override {
     for (int i : index_) s.v[static_cast<std::size_t>(i)] = u_, s.inv_mass[static_cast<std::size_t>(i)] = 0.0;
   }
   void add_forces(State<D>& s) override {
     if (s.step == tallied_step_) return;  // forces re-evaluated at the same step (checkpoint): count once
-    const double g = power(s);
-    if (tallied_step_ < 0)
-      g0_ = g;
-    else
-      left_sum_ += g_ * s.dt;
-    g_ = g;
-    tallied_step_ = s.step;
+    for (std::size_t b = 0; b < block_.size(); ++b) partial_[b * 8] = block_power(s, b);
+    tally(s);
+  }
+  bool resident_begin(State<D>&, const std::vector<long>& bounds) override {
+    bounds_ = bounds;
+    return true;
+  }
+  void resident_gather(State<D>& s, int tid) override {
+    const long lo = bounds_[static_cast<std::size_t>(tid)], hi = bounds_[static_cast<std::size_t>(tid) + 1];
+    for (std::size_t b = 0; b < block_.size(); ++b)
+      if (block_[b] * detail::share_grain >= lo && block_[b] * detail::share_grain < hi) partial_[b * 8] = block_power(s, b);
+  }
+  void resident_end_step(State<D>& s) override {
+    if (s.step != tallied_step_) tally(s);
   }
   void observe(const State<D>& s, Observables& o) const override {
     o.boundary_work += left_sum_ + 0.5 * s.dt * (g_ - g0_);
@@ -56,13 +75,29 @@ class Kinematic final : public Effect<D> {
   }
 
  private:
-  double power(const State<D>& s) const {
+  double block_power(const State<D>& s, std::size_t b) const {
     double g = 0.0;
-    for (int i : index_) g -= s.f[static_cast<std::size_t>(i)].dot(u_);
+    for (std::size_t k = block_from_[b]; k < block_from_[b + 1]; ++k)
+      g -= s.f[static_cast<std::size_t>(index_[k])].dot(u_);
     return g;
+  }
+  // the step's g from the blocks' sums, into the trapezoid tally
+  void tally(const State<D>& s) {
+    double g = 0.0;
+    for (std::size_t b = 0; b < block_.size(); ++b) g += partial_[b * 8];
+    if (tallied_step_ < 0)
+      g0_ = g;
+    else
+      left_sum_ += g_ * s.dt;
+    g_ = g;
+    tallied_step_ = s.step;
   }
   V u_;
   std::vector<int> index_;
+  std::vector<long> block_;               ///< the share_grain blocks holding selected particles, ascending
+  std::vector<std::size_t> block_from_;   ///< block b's particles: index_[block_from_[b], block_from_[b + 1])
+  std::vector<double> partial_;           ///< g of block b at [8 b] (erg/s)
+  std::vector<long> bounds_;              ///< resident steps: the team's partition
   double left_sum_ = 0.0, g0_ = 0.0, g_ = 0.0;
   long tallied_step_ = -1;
 };

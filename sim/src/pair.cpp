@@ -12,6 +12,7 @@
 #include "pmfrag/neighbors.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -57,7 +58,7 @@ class PairEffect final : public Effect<D> {
   std::string name() const override { return spec_.model == PairModel::bonded ? "pair (bonded)" : "pair (cutoff)"; }
   unsigned stages() const override {
     return stage::setup | stage::force | stage::observe | stage::step_limit | (uses_list_ ? stage::after_move : 0u) |
-           (spec_.model == PairModel::bonded ? stage::fused_force : 0u);
+           (spec_.model == PairModel::bonded ? stage::fused_force | stage::resident : 0u);
   }
 
   void setup(State<D>& s) override {
@@ -90,16 +91,7 @@ class PairEffect final : public Effect<D> {
 
   void add_forces(State<D>& s) override {
     const double cut2 = cutoff_ * cutoff_;
-    if (spec_.model == PairModel::bonded) {
-      const long broke = std::exchange(broke_, 0);
-      if (broke > 0) {
-        retire_broken(s);
-        // A pair whose bond just broke must repel as a contact from the next step on: rebuild the list then
-        // (it excluded the pair while bonded).
-        if (uses_list_) moved_bound_ = std::numeric_limits<double>::infinity();
-        if (first_break_step_ < 0) first_break_step_ = s.step, first_break_time_ = s.time();
-      }
-    }
+    settle_breaks(s, std::exchange(broke_, 0));
     if (uses_list_ && list_.size() > 0) {
       detail::with_law(laws_, nphase_ == 1, [&](const auto& law) {
         if (spec_.model == PairModel::cutoff)  // the Verlet list of a lattice is a stencil too
@@ -109,6 +101,46 @@ class PairEffect final : public Effect<D> {
       });
     }
   }
+
+  // Resident steps (effects.hpp): the bonded model's bonds and contacts, each thread on its particles.
+  bool resident_begin(State<D>&, const std::vector<long>& bounds) override {
+    if (spec_.model != PairModel::bonded) return false;
+    stencil_.prepare(bounds);
+    threads_ = static_cast<int>(bounds.size()) - 1;
+    moved_of_.assign(static_cast<std::size_t>(threads_) * 8, moved_bound_);  // a cache line per thread
+    const std::vector<int>& touched = list_.touched;
+    touched_from_.clear();
+    for (long b : bounds)
+      touched_from_.push_back(std::lower_bound(touched.begin(), touched.end(), b) - touched.begin());
+    return true;
+  }
+  bool resident_due(const State<D>&, double max_step, int tid) const override {
+    return uses_list_ && !(2.0 * (moved_of_[static_cast<std::size_t>(tid) * 8] + max_step) < skin_);  // as after_move
+  }
+  void resident_moved(double max_step, int tid) override {
+    if (uses_list_) moved_of_[static_cast<std::size_t>(tid) * 8] += max_step;
+  }
+  long resident_forces(State<D>& s, int tid) override {
+    const double cut2 = cutoff_ * cutoff_;
+    return detail::with_law(laws_, nphase_ == 1, [&](const auto& law) {
+      const long mine = stencil_.add_forces_of(tid, s.x.front().data(), s.f.front().data(), law, cut2, inv_rmin_);
+      if (mine > 0) broke_of_team_.fetch_add(mine, std::memory_order_relaxed);
+      if (uses_list_ && list_.size() > 0) {
+        const auto [first, last] = detail::share(static_cast<long>(list_.size()), tid, threads_);
+        contact_pair_forces(s, law.with_ids(list_.law.data()), first, last);
+      }
+      return mine;
+    });
+  }
+  void resident_gather(State<D>& s, int tid) override {
+    if (uses_list_ && list_.size() > 0)
+      list_.gather_touched(s.f.front().data(), touched_from_[static_cast<std::size_t>(tid)],
+                           touched_from_[static_cast<std::size_t>(tid) + 1]);
+  }
+  void resident_end(State<D>&) override {
+    if (uses_list_) moved_bound_ = moved_of_.front();
+  }
+  void resident_settle(State<D>& s) override { settle_breaks(s, broke_of_team_.exchange(0)); }
 
   void save(std::vector<double>& out) const override {
     out.push_back(static_cast<double>(first_break_step_));
@@ -226,11 +258,20 @@ class PairEffect final : public Effect<D> {
                      static_cast<std::size_t>(phase_[static_cast<std::size_t>(b)])];
   }
 
+  // Bonds found too long in the last force evaluation are gone for good (bonded model).
+  void settle_breaks(const State<D>& s, long broke) {
+    if (spec_.model != PairModel::bonded || broke == 0) return;
+    retire_broken(s);
+    // A pair whose bond just broke must repel as a contact from the next step on: rebuild the list then
+    // (it excluded the pair while bonded).
+    if (uses_list_) moved_bound_ = std::numeric_limits<double>::infinity();
+    if (first_break_step_ < 0) first_break_step_ = s.step, first_break_time_ = s.time();
+  }
+
   // The bonded model's contacts: unbonded pairs closer than r0 feel the law's repulsive branch. A select,
-  // not a branch, decides whether a pair acts, so it vectorizes.
+  // not a branch, decides whether a pair acts, so it vectorizes. Pairs [first, last) into list_.force.
   template <class Law>
-  void contact_kernel(State<D>& s, const Law law) {
-    const long m = static_cast<long>(list_.size());
+  void contact_pair_forces(const State<D>& s, const Law law, long first, long last) {
     const double inv_rmin = inv_rmin_;
     const int* __restrict pi = list_.i.data();
     const int* __restrict pj = list_.j.data();
@@ -240,6 +281,28 @@ class PairEffect final : public Effect<D> {
     double* __restrict f0 = list_.force[0].data();
     double* __restrict f1 = list_.force[1].data();
     double* __restrict f2 = list_.force[D - 1].data();
+#pragma omp simd
+    for (long p = first; p < last; ++p) {
+      const std::size_t u = static_cast<std::size_t>(p);
+      const std::size_t a = static_cast<std::size_t>(pi[u]) * D, b = static_cast<std::size_t>(pj[u]) * D;
+      const double d0 = x[a] - x[b], d1 = x[a + 1] - x[b + 1];
+      const double d2 = D == 3 ? x[a + D - 1] - x[b + D - 1] : 0.0;
+      const double r2 = d0 * d0 + d1 * d1 + d2 * d2;
+      const double rc = reach[lid[u]];
+      const bool act = r2 < rc * rc;
+      const double inv = 1.0 / std::sqrt(r2);
+      const double ie = std::min(inv, inv_rmin);  // force held constant inside r_min (Sec. 4.2)
+      const double mag = law.magnitude(u, ie) * inv;  // > 0 repulsive
+      const double fr = act ? mag : 0.0;
+      f0[u] = fr * d0;
+      f1[u] = fr * d1;
+      if constexpr (D == 3) f2[u] = fr * d2;
+    }
+  }
+
+  template <class Law>
+  void contact_kernel(State<D>& s, const Law law) {
+    const long m = static_cast<long>(list_.size());
     double* f = s.f.front().data();
     // The team's rule for particles holds for pairs too: too few contacts for a second thread (before
     // fracture, the pairs across a slit) are summed here without waking the team. The sums are the same
@@ -247,23 +310,7 @@ class PairEffect final : public Effect<D> {
     detail::Team& team = detail::Team::get(s.size());
     auto body = [&](int tid, int nt) {
       const auto [first, last] = detail::share(m, tid, nt);
-#pragma omp simd
-      for (long p = first; p < last; ++p) {
-        const std::size_t u = static_cast<std::size_t>(p);
-        const std::size_t a = static_cast<std::size_t>(pi[u]) * D, b = static_cast<std::size_t>(pj[u]) * D;
-        const double d0 = x[a] - x[b], d1 = x[a + 1] - x[b + 1];
-        const double d2 = D == 3 ? x[a + D - 1] - x[b + D - 1] : 0.0;
-        const double r2 = d0 * d0 + d1 * d1 + d2 * d2;
-        const double rc = reach[lid[u]];
-        const bool act = r2 < rc * rc;
-        const double inv = 1.0 / std::sqrt(r2);
-        const double ie = std::min(inv, inv_rmin);  // force held constant inside r_min (Sec. 4.2)
-        const double mag = law.magnitude(u, ie) * inv;  // > 0 repulsive
-        const double fr = act ? mag : 0.0;
-        f0[u] = fr * d0;
-        f1[u] = fr * d1;
-        if constexpr (D == 3) f2[u] = fr * d2;
-      }
+      contact_pair_forces(s, law, first, last);
       if (nt > 1) team.barrier(tid);  // the gather reads every thread's pair forces
       list_.gather(f, tid, nt);
     };
@@ -397,6 +444,10 @@ class PairEffect final : public Effect<D> {
   std::vector<std::uint8_t> alive_;
   std::vector<double> phi_break_;
   long broke_ = 0;  ///< bonds the last add_fused_forces found too long (retired by add_forces)
+  std::atomic<long> broke_of_team_{0};  ///< the same, summed by the threads of resident_forces
+  int threads_ = 1;                     ///< resident steps: the team's size
+  std::vector<double> moved_of_;        ///< resident steps: each thread's copy of moved_bound_ (cm)
+  std::vector<long> touched_from_;      ///< resident steps: thread t gathers list_.touched[from[t], from[t+1])
   long first_break_step_ = -1;
   double first_break_time_ = -1.0;
   std::vector<double> law_mass_;  ///< g: the lightest particle a law acts on (Eq. 15 takes the smallest m)

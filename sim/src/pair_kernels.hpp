@@ -137,8 +137,11 @@ struct PairTable {
   }
   /// f_k += sum of its pairs' forces: thread tid of nt does its share of the particles.
   void gather(double* f, int tid, int nt) const {
-    const long m = static_cast<long>(touched.size());
-    const auto [first, last] = share(m, tid, nt);
+    const auto [first, last] = share(static_cast<long>(touched.size()), tid, nt);
+    gather_touched(f, first, last);
+  }
+  /// The same for the particles touched[first, last).
+  void gather_touched(double* f, long first, long last) const {
     for (long t = first; t < last; ++t) {
       const std::size_t k = static_cast<std::size_t>(touched[static_cast<std::size_t>(t)]);
       double s[D];

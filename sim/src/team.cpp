@@ -4,6 +4,8 @@
 
 #include <omp.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 
 #if defined(__x86_64__) || defined(__i386__)
@@ -42,6 +44,23 @@ std::atomic<std::size_t>& min_particles_given() {
 }
 thread_local int tuned = 0;
 
+// Team::set_weights or PMFRAG_THREAD_WEIGHTS ("1,3": the second thread takes three times the first one's
+// particles); empty: equal shares. Per calling thread, like its teams.
+std::vector<double> weights_from_env() {
+  std::vector<double> w;
+  const char* env = std::getenv("PMFRAG_THREAD_WEIGHTS");
+  for (const char* p = env; p != nullptr && *p != '\0';) {
+    char* end = nullptr;
+    const double v = std::strtod(p, &end);
+    if (end == p || !(v > 0.0)) return {};  // not a list of positive numbers: equal shares
+    w.push_back(v);
+    p = *end == ',' ? end + 1 : end;
+  }
+  return w;
+}
+thread_local std::vector<double> weights = weights_from_env();
+thread_local unsigned weights_generation = 1;
+
 int max_threads() { return std::max(1, omp_get_max_threads()); }
 }  // namespace
 
@@ -76,6 +95,35 @@ Team::Team(int threads)
     : size_(std::max(1, threads)), done_(new Counter[static_cast<std::size_t>(size_)]),
       passed_(new Counter[static_cast<std::size_t>(size_)]) {
   for (int t = 1; t < size_; ++t) workers_.emplace_back([this, t] { work(t); });
+}
+
+void Team::set_weights(std::vector<double> w) {
+  weights = std::move(w);
+  ++weights_generation;
+}
+
+const std::vector<long>& Team::bounds(long n) {
+  if (n == bounds_n_ && bounds_generation_ == weights_generation) return bounds_;
+  std::vector<double> w(static_cast<std::size_t>(size_), 1.0);
+  if (weights.size() == w.size()) w = weights;
+  double total = 0.0;
+  for (double v : w) total += v;
+  // cumulative weight -> whole grains; every thread keeps at least one grain if there are enough
+  const long units = (n + share_grain - 1) / share_grain;
+  const long least = units >= size_ ? 1 : 0;
+  bounds_.assign(static_cast<std::size_t>(size_) + 1, 0);
+  double cum = 0.0;
+  long prev = 0;
+  for (int t = 1; t < size_; ++t) {
+    cum += w[static_cast<std::size_t>(t) - 1] / total;
+    const long u = std::clamp(std::lround(cum * static_cast<double>(units)), prev + least, units - (size_ - t) * least);
+    bounds_[static_cast<std::size_t>(t)] = std::min(n, u * share_grain);
+    prev = u;
+  }
+  bounds_[static_cast<std::size_t>(size_)] = n;
+  bounds_n_ = n;
+  bounds_generation_ = weights_generation;
+  return bounds_;
 }
 
 Team::~Team() {
@@ -130,4 +178,5 @@ void Team::barrier(int tid) {
 namespace pmfrag {
 void set_min_particles_per_thread(std::size_t n) { detail::min_particles_given().store(n); }
 int step_threads(std::size_t particles) { return detail::Team::threads_for(particles); }
+void set_thread_weights(std::vector<double> weights) { detail::Team::set_weights(std::move(weights)); }
 }  // namespace pmfrag

@@ -46,6 +46,12 @@ class Team {
 
   int size() const { return size_; }
 
+  /// The team's partition of n particles: thread t takes [b[t], b[t + 1]), contiguous shares in multiples
+  /// of share_grain, equal unless set_weights says otherwise. Call outside `run`. Every per-particle kernel
+  /// of a step uses it, so each thread finds the positions, velocities and forces it touches in its own
+  /// core's cache.
+  const std::vector<long>& bounds(long n);
+
   /// Runs body(tid) on every thread (the caller is tid 0); returns when all have finished. A deferred
   /// prologue, if any, runs first in the same hand-out, with a barrier between the two.
   template <class Body>
@@ -82,6 +88,11 @@ class Team {
   /// thread's tid).
   void barrier(int tid);
 
+  /// Each thread's share of particles, in proportion (calling thread's teams of that size; empty: equal).
+  /// Results do not depend on it (every particle's forces are summed in a fixed order whoever computes
+  /// them): tests use it to check that. Also PMFRAG_THREAD_WEIGHTS, e.g. "1,3".
+  static void set_weights(std::vector<double> weights);
+
  private:
   using Fn = void (*)(void*, int);
   void dispatch(Fn fn, void* ctx);
@@ -117,6 +128,9 @@ class Team {
   std::unique_ptr<Counter[]> done_;  ///< per worker: the generation it last finished (written by it)
   std::unique_ptr<Counter[]> passed_;  ///< per thread: barriers it has reached (written by it)
   std::vector<std::thread> workers_;
+  long bounds_n_ = -1;  ///< the particle count bounds_ was made for (-1: stale)
+  unsigned bounds_generation_ = 0;  ///< the weights' generation bounds_ was made with
+  std::vector<long> bounds_;
 };
 
 /// Thread tid's share [begin, end) of n items, in multiples of `grain` (except the last).
@@ -130,24 +144,17 @@ inline std::pair<long, long> share(long n, int tid, int threads, long grain = 1)
 
 /// The assembly block of the bond stencil (a multiple of every vector width); a thread gets at least one.
 inline constexpr long particle_grain = 256;
-/// Thread tid's particles [begin, end). Every per-particle kernel of a step uses this one partition, so
-/// each thread finds the positions, velocities and forces it touches in its own core's cache. Shares
-/// start on multiples of 64 particles (whole cache lines, whole vectors): in blocks of 256 the (7,14)
-/// plate's 2698 particles split 1536 / 1162, and the first thread's bond pass took 11,800 cycles a step
-/// against the second's 8,600 (measured, session 9).
+/// Particle shares (Team::bounds) start on multiples of 64 particles (whole cache lines, whole vectors): in
+/// blocks of 256 the (7,14) plate's 2698 particles split 1536 / 1162, and the first thread's bond pass took
+/// 11,800 cycles a step against the second's 8,600 (measured, session 9).
 inline constexpr long share_grain = 64;
-inline std::pair<long, long> particle_share(long n, int tid, int threads) {
-  return share(n, tid, threads, share_grain);
-}
 
-/// body(first, last, tid) on every thread of the team for n particles, each with its particle_share.
+/// body(first, last, tid) on every thread of the team for n particles, each with its share (Team::bounds).
 template <class Body>
 inline void for_particles(std::size_t n, Body&& body) {
   Team& team = Team::get(n);
-  team.run([&](int tid) {
-    const auto [first, last] = particle_share(static_cast<long>(n), tid, team.size());
-    body(first, last, tid);
-  });
+  const std::vector<long>& b = team.bounds(static_cast<long>(n));
+  team.run([&](int tid) { body(b[static_cast<std::size_t>(tid)], b[static_cast<std::size_t>(tid) + 1], tid); });
 }
 
 }  // namespace pmfrag::detail

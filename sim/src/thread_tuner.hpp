@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstddef>
+#include <limits>
 #include <vector>
 
 namespace pmfrag::detail {
@@ -38,25 +39,35 @@ class ThreadTuner {
   bool active() const { return !candidates_.empty(); }
 
   /// Before a step: sets the calling thread's thread count for it, and starts the clock in a probe window.
-  void before_step() {
-    // (set every step: another integrator on this thread may have set its own count)
-    Team::set_tuned_threads(!active() ? 0 : holding_ > 0 ? best_ : candidates_[probe_]);
-    if (!active()) return;
-    if (holding_ == 0 && count_ >= warm_steps) start_ = clock::now();
-  }
-
+  void before_step() { before_steps(); }
   /// After the step.
-  void after_step(int threads_used) {
-    const std::size_t k = static_cast<std::size_t>(threads_used);
-    if (steps_with_.size() <= k) steps_with_.resize(k + 1, 0);
-    ++steps_with_[k];
-    if (!active()) return;
+  void after_step(int threads_used) { after_steps(threads_used, 1); }
+
+  /// Before a block of steps (Leapfrog::advance): as before_step; returns how many steps the block may
+  /// take on this count (to the end of the hold, or a few at a time in a probe window, each timed).
+  long before_steps() {
+    // (set every time: another integrator on this thread may have set its own count)
+    Team::set_tuned_threads(!active() ? 0 : holding_ > 0 ? best_ : candidates_[probe_]);
+    if (!active()) return std::numeric_limits<long>::max();
+    if (holding_ > 0) return holding_;
+    if (count_ < warm_steps) return warm_steps - count_;
+    start_ = clock::now();
+    return std::min(timed_block, window_ - count_);
+  }
+  /// After a block of k steps (at most what before_steps allowed).
+  void after_steps(int threads_used, long k) {
+    const std::size_t t = static_cast<std::size_t>(threads_used);
+    if (steps_with_.size() <= t) steps_with_.resize(t + 1, 0);
+    steps_with_[t] += k;
+    if (!active() || k <= 0) return;
     if (holding_ > 0) {
-      --holding_;
+      holding_ -= std::min(k, holding_);
       return;
     }
-    if (count_ >= warm_steps) times_.push_back(std::chrono::duration<double>(clock::now() - start_).count());
-    if (++count_ < window_) return;
+    if (count_ >= warm_steps)  // the block's mean step
+      times_.push_back(std::chrono::duration<double>(clock::now() - start_).count() / static_cast<double>(k));
+    count_ += k;
+    if (count_ < window_) return;
     // the window on candidate probe_ is over: its mean step, the slowest 1/16 left out
     const std::size_t kept = times_.size() - times_.size() / 16;
     std::nth_element(times_.begin(), times_.begin() + static_cast<std::ptrdiff_t>(kept), times_.end());
@@ -83,6 +94,9 @@ class ThreadTuner {
   using clock = std::chrono::steady_clock;
   // steps at the start of a window left out of the timing: a team that has slept, its first plan, caches
   static constexpr long warm_steps = 8;
+  // steps timed together in a probe window of blocks: short enough that the trimmed mean still leaves out
+  // a step with a list rebuild or a frame, long enough that a block's barriers are those of a long run
+  static constexpr long timed_block = 8;
   std::vector<int> candidates_;
   std::vector<double> per_step_;  ///< s: each candidate's (trimmed) mean step in the last probe
   std::vector<double> times_;     ///< s: the steps timed in this window

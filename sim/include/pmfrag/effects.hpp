@@ -50,6 +50,10 @@ inline constexpr unsigned step_limit = 1u << 4;  ///< bound the next step (calle
 /// forces at r_k that read only positions and the effect's own state, not what after_move maintains (the
 /// bonds of the bonded model): evaluated before the other stages, in the same thread-team pass as the move
 inline constexpr unsigned fused_force = 1u << 5;
+/// the effect's work in quiet steps can also run inside one thread-team pass over many steps
+/// (Leapfrog::advance), through the resident_* calls; an attached effect without it keeps every step on the
+/// plain path (one team pass per step, the serial stages between)
+inline constexpr unsigned resident = 1u << 6;
 }  // namespace stage
 
 template <int D>
@@ -65,6 +69,32 @@ class Effect {
   /// on positions the guard then rejects, so it changes nothing but s.f and buffers of its own: what
   /// follows from those forces, e.g. retiring broken bonds, waits for add_forces).
   virtual void add_fused_forces(State<D>&) {}
+
+  // Resident steps (stage::resident). The team's threads run the steps of a block together, thread t on its
+  // particles [bounds[t], bounds[t + 1]); per step: the move, a barrier, resident_due, resident_moved and
+  // resident_forces, a barrier, resident_gather. A step in which something happens (a bond breaks, a list
+  // may be due) leaves the block and is finished on the plain path, so the trajectory is bitwise the one
+  // step() gives.
+  /// Before a block, outside the team: ready the threads' work; false if the next step must be plain.
+  virtual bool resident_begin(State<D>&, const std::vector<long>& /*bounds*/) { return false; }
+  /// Every thread alike, after the move (max_step as for after_move): true if this step needs the plain
+  /// after_move (a list may be due). Changes nothing.
+  virtual bool resident_due(const State<D>&, double /*max_step*/, int /*tid*/) const { return false; }
+  /// Every thread, if no effect was due: record what after_move would have (in the thread's own copy).
+  virtual void resident_moved(double /*max_step*/, int /*tid*/) {}
+  /// Thread tid: forces on its particles that read only positions; returns the events (bonds found too long)
+  /// the plain add_forces must settle. Thread tid's part of add_forces otherwise.
+  virtual long resident_forces(State<D>&, int /*tid*/) { return 0; }
+  /// Thread tid, after a barrier: what needs every thread's resident_forces (gathers into its particles).
+  virtual void resident_gather(State<D>&, int /*tid*/) {}
+  /// One thread, once the step's forces are complete everywhere (s.step advanced): the serial rest of
+  /// add_forces for a step without events (tallies).
+  virtual void resident_end_step(State<D>&) {}
+  /// After the block, outside the team: keep what the threads recorded (e.g. the moved bound).
+  virtual void resident_end(State<D>&) {}
+  /// For a step that ended the block with events: settle them as add_forces would (then resident_end_step).
+  virtual void resident_settle(State<D>&) {}
+
   /// `max_step` bounds how far any particle moved in this step [cm] (a cheap bound for Verlet lists).
   virtual void after_move(State<D>&, double /*max_step*/) {}
   virtual void observe(const State<D>&, Observables&) const {}

@@ -12,6 +12,7 @@ namespace pmfrag {
 
 namespace detail {
 class ThreadTuner;
+class Team;
 }
 
 struct GuardError : std::runtime_error {
@@ -39,6 +40,9 @@ class Leapfrog {
   /// The same with a step of its own (dt = "adaptive"): the kick spans half of the previous step and half
   /// of this one, v_k+1/2 = v_k-1/2 + (dt_k-1 + dt_k)/2 a_k, which is Eq. (13) when the two are equal.
   void step(double dt);
+  /// `steps` steps of the fixed dt, the same as calling step() that often: quiet steps of scenes whose
+  /// effects all allow it run many to one pass of the thread team (Effect's resident steps). Returns steps.
+  long advance(long steps);
   /// The smallest Eq. (15) limit the attached effects report for the present configuration [s].
   double step_limit() const;
 
@@ -65,11 +69,18 @@ class Leapfrog {
 
  private:
   void compute_forces();  ///< all forces at r_k, from zero
+  void move(int tid, const std::vector<long>& share, double h, double dt);
+  int plain_step(double dt);  ///< one step, one team pass (returns the threads used)
+  void finish_step(double dt, int threads);
+  long resident_steps(detail::Team& team, long steps);
   State<D> s_;
   std::vector<std::unique_ptr<Effect<D>>> effects_;
   std::vector<Effect<D>*> fused_force_, force_, after_move_, observe_, step_limit_;
   std::vector<double> inv_mass_dof_;  ///< 1/g per degree of freedom (N x D), for the flat update pass
-  std::vector<double> max2_of_;       ///< each thread's largest squared component move in the last step
+  std::vector<double> moves_;   ///< per thread, a cache line: the last move's largest squared component, bad count
+  std::vector<double> events_;  ///< per thread, a cache line: events its resident forces found
+  std::vector<Effect<D>*> resident_;
+  bool resident_ok_ = true;     ///< every effect acting in a step has resident steps
   bool uniform_ = true;  ///< every step so far had the same dt: time = step x dt exactly
   std::unique_ptr<detail::ThreadTuner> tuner_;  ///< how many threads each step runs on
 };
