@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <utility>
 
 namespace pmfrag {
 
@@ -128,6 +129,19 @@ void Leapfrog<D>::move(int tid, const std::vector<long>& share, double h, double
   slot[1] = static_cast<double>(k.bad);
 }
 
+// The last move over all threads: components that failed the guard's test, the largest squared move.
+template <int D>
+std::pair<long, double> Leapfrog<D>::moved(int threads) const {
+  long bad = 0;
+  double max2 = 0.0;
+  for (int t = 0; t < threads; ++t) {
+    const double* slot = moves_.data() + static_cast<std::size_t>(t) * line_doubles;
+    max2 = std::max(max2, slot[0]);
+    bad += static_cast<long>(slot[1]);
+  }
+  return {bad, max2};
+}
+
 template <int D>
 int Leapfrog<D>::plain_step(double dt) {
   const long n = static_cast<long>(s_.size());
@@ -156,13 +170,7 @@ int Leapfrog<D>::plain_step(double dt) {
 // after_move, the other forces.
 template <int D>
 void Leapfrog<D>::finish_step(double dt, int threads) {
-  long bad = 0;
-  double max2 = 0.0;
-  for (int t = 0; t < threads; ++t) {
-    const double* slot = moves_.data() + static_cast<std::size_t>(t) * line_doubles;
-    max2 = std::max(max2, slot[0]);
-    bad += static_cast<long>(slot[1]);
-  }
+  const auto [bad, max2] = moved(threads);
   if (bad > 0) {
     for (std::size_t i = 0; i < s_.size(); ++i) {
       const double move = dt * s_.v[i].norm();
@@ -232,13 +240,7 @@ long Leapfrog<D>::resident_steps(detail::Team& team, long steps) {
       // every thread reads the same moves and so decides alike
       if (tid == 0 && j > 0)
         for (auto* e : resident_) e->resident_end_step(s_);  // step j-1: every thread's gather is in
-      long bad = 0;
-      double max2 = 0.0;
-      for (int t = 0; t < threads; ++t) {
-        const double* slot = moves_.data() + static_cast<std::size_t>(t) * line_doubles;
-        max2 = std::max(max2, slot[0]);
-        bad += static_cast<long>(slot[1]);
-      }
+      const auto [bad, max2] = moved(threads);
       const double max_step = std::sqrt(D * max2);
       bool due = bad > 0;
       for (auto* e : resident_) due = due || e->resident_due(s_, max_step, tid);

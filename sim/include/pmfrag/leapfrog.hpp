@@ -6,6 +6,7 @@
 
 #include <memory>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 namespace pmfrag {
@@ -71,6 +72,7 @@ class Leapfrog {
   void compute_forces();  ///< all forces at r_k, from zero
   void move(int tid, const std::vector<long>& share, double h, double dt);
   int plain_step(double dt);  ///< one step, one team pass (returns the threads used)
+  std::pair<long, double> moved(int threads) const;
   void finish_step(double dt, int threads);
   long resident_steps(detail::Team& team, long steps);
   State<D> s_;
