@@ -146,7 +146,7 @@ class BondStencil {
         current_ = k;
         return;
       }
-    // The team rebalances its shares by a grain now and then, back and forth: a few plans cover that.
+    // A partition per thread count the tuner tries (and per weights a test sets): a few plans cover them.
     constexpr std::size_t kept = 6;
     if (plans_.size() == kept) plans_.erase(plans_.begin());
     plans_.emplace_back(bounds, plan(bounds));

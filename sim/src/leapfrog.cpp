@@ -4,7 +4,6 @@
 #include "thread_tuner.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
 #include <sstream>

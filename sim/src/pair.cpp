@@ -106,8 +106,7 @@ class PairEffect final : public Effect<D> {
   bool resident_begin(State<D>&, const std::vector<long>& bounds) override {
     if (spec_.model != PairModel::bonded) return false;
     stencil_.prepare(bounds);
-    threads_ = static_cast<int>(bounds.size()) - 1;
-    moved_of_.assign(static_cast<std::size_t>(threads_) * 8, moved_bound_);  // a cache line per thread
+    moved_of_.assign((bounds.size() - 1) * 8, moved_bound_);  // a cache line per thread
     const std::vector<int>& touched = list_.touched;
     touched_from_.clear();
     for (long b : bounds)
@@ -126,7 +125,8 @@ class PairEffect final : public Effect<D> {
       const long mine = stencil_.add_forces_of(tid, s.x.front().data(), s.f.front().data(), law, cut2, inv_rmin_);
       if (mine > 0) broke_of_team_.fetch_add(mine, std::memory_order_relaxed);
       if (uses_list_ && list_.size() > 0) {
-        const auto [first, last] = detail::share(static_cast<long>(list_.size()), tid, threads_);
+        const int threads = static_cast<int>(touched_from_.size()) - 1;
+        const auto [first, last] = detail::share(static_cast<long>(list_.size()), tid, threads);
         contact_pair_forces(s, law.with_ids(list_.law.data()), first, last);
       }
       return mine;
@@ -445,7 +445,6 @@ class PairEffect final : public Effect<D> {
   std::vector<double> phi_break_;
   long broke_ = 0;  ///< bonds the last add_fused_forces found too long (retired by add_forces)
   std::atomic<long> broke_of_team_{0};  ///< the same, summed by the threads of resident_forces
-  int threads_ = 1;                     ///< resident steps: the team's size
   std::vector<double> moved_of_;        ///< resident steps: each thread's copy of moved_bound_ (cm)
   std::vector<long> touched_from_;      ///< resident steps: thread t gathers list_.touched[from[t], from[t+1])
   long first_break_step_ = -1;

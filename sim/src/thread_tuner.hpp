@@ -6,8 +6,9 @@
 // follow the clock without costing reproducibility.
 //
 // Every so often the tuner runs a short window of steps on each candidate count (1, 2, 4, ... up to the
-// most the body can use), takes the mean time of a step in each with the slowest 1/16 of steps left out
-// (a neighbour-list rebuild or a frame written between steps does not sway it), and holds the fastest until
+// most the body can use), takes the mean time of a step in each with the slowest 1/16 of steps (under
+// Leapfrog::advance, of blocks of up to 8 steps) left out (a neighbour-list rebuild or a frame written
+// between steps does not sway it), and holds the fastest until
 // the next probe. Not the median: on this VM a two-thread step of the plate had a median of 17,700 cycles
 // and a mean of 22,400 (the worker now and then starts or finishes thousands of cycles late, in one step
 // of ten or more; rdtsc, session 10), so the median chose two threads where one ran as fast. Only probe
