@@ -114,7 +114,7 @@ class PairEffect final : public Effect<D> {
     return true;
   }
   bool resident_due(const State<D>&, double max_step, int tid) const override {
-    return uses_list_ && !(2.0 * (moved_of_[static_cast<std::size_t>(tid) * 8] + max_step) < skin_);  // as after_move
+    return uses_list_ && !list_holds(moved_of_[static_cast<std::size_t>(tid) * 8] + max_step);
   }
   void resident_moved(double max_step, int tid) override {
     if (uses_list_) moved_of_[static_cast<std::size_t>(tid) * 8] += max_step;
@@ -163,7 +163,7 @@ class PairEffect final : public Effect<D> {
     // Verlet criterion with a bound instead of a pass over the particles: no particle has moved more than
     // the sum of the largest single-step moves since the build. Rebuild before two could have closed the skin.
     moved_bound_ += max_step;
-    if (2.0 * moved_bound_ < skin_) return;
+    if (list_holds(moved_bound_)) return;
     // The bound is loose once particles vibrate: each step's largest move is added though they move back.
     // The displacements themselves decide (one pass over the particles, cheaper than a rebuild: the broken
     // cutoff plate rebuilt every 24 steps on the bound, at ~2 ms each). Well before the skin is used up
@@ -257,6 +257,10 @@ class PairEffect final : public Effect<D> {
     return pair_law_[static_cast<std::size_t>(phase_[static_cast<std::size_t>(a)]) * nphase_ +
                      static_cast<std::size_t>(phase_[static_cast<std::size_t>(b)])];
   }
+
+  // The Verlet criterion, one test for plain and resident steps: while no particle has moved more than
+  // `bound` [cm] since the build, no two can have closed the skin.
+  bool list_holds(double bound) const { return 2.0 * bound < skin_; }
 
   // Bonds found too long in the last force evaluation are gone for good (bonded model).
   void settle_breaks(const State<D>& s, long broke) {
