@@ -116,6 +116,10 @@ class BondStencil {
     wraps_ = ring_ < n_ + static_cast<std::size_t>(reach_);
   }
 
+  /// Whether add_forces sets f (f = 0 + the bond forces, for every particle) instead of adding to it: the
+  /// move then need not zero f, nor the assembly read it (two of the plate's seven streams through L2).
+  void assign_forces(bool assign) { assign_ = assign; }
+
   void set_alive(std::size_t bond, bool alive) {
     const auto [g, k] = loc_[bond];
     if (g >= 0)
@@ -380,8 +384,12 @@ class BondStencil {
     double* __restrict fb = f + static_cast<std::size_t>(b0) * D;
 #ifdef PMFRAG_HAVE_AVX512_SWEEP
     static_assert(block == 256, "assemble_block_avx512 takes blocks of 256");
-    assemble_block_avx512<D>(w.F.data(), at, ring_ - 1, w.stride, offsets_.data(), groups_.size(),
-                             any_extra ? extra : nullptr, fb, len);
+    if (assign_)
+      assemble_block_avx512<D, true>(w.F.data(), at, ring_ - 1, w.stride, offsets_.data(), groups_.size(),
+                                     any_extra ? extra : nullptr, fb, len);
+    else
+      assemble_block_avx512<D, false>(w.F.data(), at, ring_ - 1, w.stride, offsets_.data(), groups_.size(),
+                                      any_extra ? extra : nullptr, fb, len);
 #else
     alignas(64) double acc[D][block];
     for (int c = 0; c < D; ++c)
@@ -401,12 +409,16 @@ class BondStencil {
       for (int c = 0; c < D; ++c)
         for (std::size_t k = 0; k < len; ++k) acc[c][k] += extra[c][k];
     for (std::size_t k = 0; k < len; ++k)
-      for (int c = 0; c < D; ++c) fb[k * D + static_cast<std::size_t>(c)] += acc[c][k];
+      for (int c = 0; c < D; ++c) {
+        double& out = fb[k * D + static_cast<std::size_t>(c)];
+        out = (assign_ ? 0.0 : out) + acc[c][k];
+      }
 #endif
   }
 
   std::size_t n_ = 0;
   bool single_ = false;
+  bool assign_ = false;  ///< add_forces sets f rather than adding to it
   long reach_ = 0;  ///< the largest offset, rounded up to 8
   std::size_t ring_ = particle_grain;  ///< R: slots per offset and component of a thread's F
   bool wraps_ = true;                  ///< some slot of a ring holds more than one particle

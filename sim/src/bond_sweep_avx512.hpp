@@ -103,12 +103,13 @@ inline long sweep_fixed_avx512(const double* __restrict x0, const double* __rest
 }
 
 /// The assembly of one block of len particles: f_i += sum over the offsets o_g of F_g[i] - F_g[i - o_g], then
-/// + extra[i] if given, f (N x D, interleaved) from the block's first particle. F_g's component c is the ring
+/// + extra[i] if given, f (N x D, interleaved) from the block's first particle. Assign: f_i = 0 + the sum
+/// instead (the same bits as adding to a zeroed f, without reading f). F_g's component c is the ring
 /// at rows + (g D + c) stride: particle i at slot i & mask, the block's first at slot `at`; a ring's slots
 /// from mask + 1 on repeat its first block, so F_g[i - o_g] is read on without wrapping. Eight particles at
 /// a time with the sums in registers: through memory, the running sums were read back right after being
 /// stored, and the loop ran at a quarter of its speed.
-template <int D>
+template <int D, bool Assign>
 inline void assemble_block_avx512(const double* rows, std::size_t at, std::size_t mask, std::size_t stride,
                                   const std::size_t* offsets, std::size_t groups, const double (*extra)[256], double* f,
                                   std::size_t len) {
@@ -132,13 +133,18 @@ inline void assemble_block_avx512(const double* rows, std::size_t at, std::size_
       const __m512i lo = _mm512_set_epi64(11, 3, 10, 2, 9, 1, 8, 0), hi = _mm512_set_epi64(15, 7, 14, 6, 13, 5, 12, 4);
       const __mmask8 mlo = left >= 4 ? __mmask8(0xff) : __mmask8((1u << (2 * left)) - 1u);
       const __mmask8 mhi = left >= 8 ? __mmask8(0xff) : left > 4 ? __mmask8((1u << (2 * (left - 4))) - 1u) : __mmask8(0);
-      _mm512_mask_storeu_pd(fk, mlo, _mm512_add_pd(_mm512_maskz_loadu_pd(mlo, fk), _mm512_permutex2var_pd(a[0], lo, a[1])));
-      _mm512_mask_storeu_pd(fk + 8, mhi, _mm512_add_pd(_mm512_maskz_loadu_pd(mhi, fk + 8), _mm512_permutex2var_pd(a[0], hi, a[1])));
+      const __m512d f0 = Assign ? _mm512_setzero_pd() : _mm512_maskz_loadu_pd(mlo, fk);
+      const __m512d f1 = Assign ? _mm512_setzero_pd() : _mm512_maskz_loadu_pd(mhi, fk + 8);
+      _mm512_mask_storeu_pd(fk, mlo, _mm512_add_pd(f0, _mm512_permutex2var_pd(a[0], lo, a[1])));
+      _mm512_mask_storeu_pd(fk + 8, mhi, _mm512_add_pd(f1, _mm512_permutex2var_pd(a[0], hi, a[1])));
     } else {
       alignas(64) double t[D][8];
       for (int c = 0; c < D; ++c) _mm512_store_pd(t[c], a[c]);
       for (std::size_t q = 0; q < (left < 8 ? left : 8); ++q)
-        for (int c = 0; c < D; ++c) fk[q * D + static_cast<std::size_t>(c)] += t[c][q];
+        for (int c = 0; c < D; ++c) {
+          double& out = fk[q * D + static_cast<std::size_t>(c)];
+          out = (Assign ? 0.0 : out) + t[c][q];
+        }
     }
   }
 }

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 #include <utility>
 
 namespace pmfrag {
@@ -24,6 +25,8 @@ struct Kick {
 // the lambda handed to the thread team: inlined into the team's dispatch thunk, GCC 12 kept the reduction
 // variables in memory, and the two-thread plate's pass took 15,000 cycles instead of 3,000 (measured); kept
 // out of line so every caller runs the same, vectorized code.
+// ZeroF: f is used up here (the next evaluation adds into zeros); otherwise the first fused force sets it.
+template <bool ZeroF>
 [[gnu::noinline]] Kick kick_drift(double* __restrict x, double* __restrict v, double* __restrict f, const double* __restrict inv_mass,
                        long b, long e, double h, double dt, double component_limit2) {
   long bad = 0;
@@ -34,7 +37,7 @@ struct Kick {
     const double dx = dt * vj;
     v[j] = vj;
     x[j] += dx;
-    f[j] = 0.0;  // used; the next evaluation adds into zeros
+    if constexpr (ZeroF) f[j] = 0.0;
     const double d2 = dx * dx;
     bad += !(d2 <= component_limit2);
     max2 = std::max(max2, d2);
@@ -63,6 +66,11 @@ Leapfrog<D>::Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>>
   }
   for (auto& e : effects_) {
     const unsigned st = e->stages();
+    if (st & stage::assigns_forces) {
+      if (!(st & stage::fused_force) || !fused_force_.empty())
+        throw std::logic_error(e->name() + ": only the first fused-force effect can assign the forces");
+      assigned_ = true;
+    }
     if (st & stage::fused_force) fused_force_.push_back(e.get());
     if (st & stage::force) force_.push_back(e.get());
     if (st & stage::after_move) after_move_.push_back(e.get());
@@ -121,8 +129,9 @@ template <int D>
 void Leapfrog<D>::move(int tid, const std::vector<long>& share, double h, double dt) {
   const double component_limit2 = 0.25 * s_.r0 * s_.r0 / D;
   const long first = share[static_cast<std::size_t>(tid)], last = share[static_cast<std::size_t>(tid) + 1];
-  const Kick k = kick_drift(s_.x.front().data(), s_.v.front().data(), s_.f.front().data(), inv_mass_dof_.data(),
-                            first * D, last * D, h, dt, component_limit2);
+  const auto kick = assigned_ ? kick_drift<false> : kick_drift<true>;
+  const Kick k = kick(s_.x.front().data(), s_.v.front().data(), s_.f.front().data(), inv_mass_dof_.data(), first * D,
+                      last * D, h, dt, component_limit2);
   double* slot = moves_.data() + static_cast<std::size_t>(tid) * line_doubles;
   slot[0] = k.max2;
   slot[1] = static_cast<double>(k.bad);
@@ -190,7 +199,7 @@ void Leapfrog<D>::finish_step(double dt, int threads) {
   s_.t = uniform_ ? static_cast<double>(s_.step) * dt : s_.t + dt;
   const double max_step = std::sqrt(D * max2);
   for (auto* e : after_move_) e->after_move(s_, max_step);
-  for (auto* e : force_) e->add_forces(s_);  // f was zeroed by the move, and holds the fused forces
+  for (auto* e : force_) e->add_forces(s_);  // f holds the fused forces (added to the zeros the move left, or set by them)
 }
 
 template <int D>

@@ -41,7 +41,10 @@ class PairEffect final : public Effect<D> {
     for (const auto& b : sys.bonds) bi_.push_back(b[0]), bj_.push_back(b[1]), blaw_.push_back(law_of(b[0], b[1]));
     alive_.assign(bi_.size(), 1);
     phi_break_.assign(bi_.size(), 0.0);
-    if (spec_.model == PairModel::bonded) stencil_ = detail::BondStencil<D>(n_, bi_, bj_, blaw_, spec_.single_precision);
+    if (spec_.model == PairModel::bonded) {
+      stencil_ = detail::BondStencil<D>(n_, bi_, bj_, blaw_, spec_.single_precision);
+      stencil_.assign_forces(true);  // stage::assigns_forces: the bonds' sum is every particle's first term
+    }
     contact_reach_.resize(laws_.size());
     for (std::size_t l = 0; l < laws_.size(); ++l) contact_reach_[l] = laws_[l].equilibrium_spacing();
     max_reach_ = spec_.model == PairModel::cutoff ? cutoff_ : *std::max_element(contact_reach_.begin(), contact_reach_.end());
@@ -58,7 +61,7 @@ class PairEffect final : public Effect<D> {
   std::string name() const override { return spec_.model == PairModel::bonded ? "pair (bonded)" : "pair (cutoff)"; }
   unsigned stages() const override {
     return stage::setup | stage::force | stage::observe | stage::step_limit | (uses_list_ ? stage::after_move : 0u) |
-           (spec_.model == PairModel::bonded ? stage::fused_force | stage::resident : 0u);
+           (spec_.model == PairModel::bonded ? stage::fused_force | stage::assigns_forces | stage::resident : 0u);
   }
 
   void setup(State<D>& s) override {

@@ -83,6 +83,7 @@ class Leapfrog {
   std::vector<double> events_;  ///< per thread, a cache line: events its resident forces found
   std::vector<Effect<D>*> resident_;
   bool resident_ok_ = true;     ///< every effect acting in a step has resident steps
+  bool assigned_ = false;       ///< the first fused force sets f (stage::assigns_forces): the move keeps it
   bool uniform_ = true;  ///< every step so far had the same dt: time = step x dt exactly
   std::unique_ptr<detail::ThreadTuner> tuner_;  ///< how many threads each step runs on
 };
