@@ -333,8 +333,9 @@ TEST(Dynamics, ResidentStepsAreBitwiseThePlainOnes) {
   // Leapfrog::advance runs quiet steps many to one pass of the thread team and leaves the pass for a step in
   // which something happens (a contact list may be due, a bond breaks). The plate pulled 100x faster than in
   // the paper breaks after ~1,150 steps, and its contact list is rebuilt hundreds of times after; the
-  // kinematic rows' work is tallied inside the pass. Run on two threads with equal and with 1:3 shares, it
-  // must end bitwise where plain steps on one thread end, observables included.
+  // kinematic rows' work is tallied inside the pass. Run on two threads with equal and with 1:3 shares, and
+  // with shares that change between blocks of steps (as the load balancer moves them), it must end bitwise
+  // where plain steps on one thread end, observables included.
   const Scene sc = read_scene(test::case_path("slit_plate_7_14.toml"),
                               {"kinematic.0.velocity=[0.0, 2000.0]", "kinematic.1.velocity=[0.0, -2000.0]"});
   const long steps = 3000;
@@ -358,10 +359,15 @@ TEST(Dynamics, ResidentStepsAreBitwiseThePlainOnes) {
   ASSERT_GT(broke.first_break_step, 0) << "the test needs bonds to break";
   ASSERT_GT(broke.list_builds, 10) << "the test needs the contact list to be rebuilt";
   omp_set_num_threads(2);
-  for (const std::vector<double>& weights : {std::vector<double>{}, std::vector<double>{1.0, 3.0}}) {
-    set_thread_weights(weights);
+  const std::vector<std::vector<double>> changing = {{1.0, 3.0}, {3.0, 1.0}, {1.0, 1.0}, {2.0, 1.0}};
+  for (const std::vector<double>& weights : {std::vector<double>{}, std::vector<double>{1.0, 3.0}, std::vector<double>{0.0}}) {
+    const bool change = weights.size() == 1;  // {0}: the shares change every block of 250 steps
+    set_thread_weights(change ? changing.front() : weights);
     auto lf = test::make_leapfrog<2>(sys, sc, dt);
-    for (long k = 0; k < steps; k += 250) EXPECT_EQ(lf.advance(std::min(250L, steps - k)), std::min(250L, steps - k));
+    for (long k = 0; k < steps; k += 250) {
+      if (change) set_thread_weights(changing[static_cast<std::size_t>(k / 250) % changing.size()]);
+      EXPECT_EQ(lf.advance(std::min(250L, steps - k)), std::min(250L, steps - k));
+    }
     ASSERT_EQ(lf.state().step, steps);
     ASSERT_GE(lf.thread_steps().size(), 3u);
     EXPECT_EQ(lf.thread_steps()[2], steps);

@@ -1,5 +1,6 @@
 #include "pmfrag/leapfrog.hpp"
 
+#include "load_balancer.hpp"
 #include "team.hpp"
 #include "thread_tuner.hpp"
 
@@ -49,7 +50,8 @@ template <bool ZeroF>
 
 template <int D>
 Leapfrog<D>::Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>> effects, double dt, bool adaptive)
-    : effects_(std::move(effects)), uniform_(!adaptive), tuner_(std::make_unique<detail::ThreadTuner>(sys.size())) {
+    : effects_(std::move(effects)), uniform_(!adaptive), tuner_(std::make_unique<detail::ThreadTuner>(sys.size())),
+      balancer_(std::make_unique<detail::LoadBalancer>()) {
   const std::size_t n = sys.size();
   s_.dt = dt;
   s_.r0 = sys.r0;
@@ -206,10 +208,11 @@ template <int D>
 long Leapfrog<D>::advance(long steps) {
   long k = 0;
   while (k < steps) {
-    const long room = std::min(tuner_->before_steps(), steps - k);
+    long room = std::min(tuner_->before_steps(), steps - k);
     detail::Team& team = detail::Team::get(s_.size());
     long took = 0;
     if (team.size() > 1 && resident_ok_ && uniform_ && s_.step > 0) {
+      room = std::min(room, std::max(1L, balancer_->room()));
       took = resident_steps(team, room);
     } else {
       for (; took < room; ++took) plain_step(s_.dt);
@@ -225,7 +228,8 @@ long Leapfrog<D>::advance(long steps) {
 // ~5 us of work, while a barrier costs 0.1-0.5 us; and nothing runs on one thread alone between steps, so no
 // core reads the others' particles but at the edges of its share. A step in which something happens (the
 // guard's component test fails, a neighbour list may be due, a bond breaks) ends the block and is finished
-// on the plain path. Returns the steps taken (at least one).
+// on the plain path. Each thread's busy time in the block goes to the load balancer (load_balancer.hpp),
+// which may move the shares before the next block. Returns the steps taken (at least one).
 template <int D>
 long Leapfrog<D>::resident_steps(detail::Team& team, long steps) {
   const long n = static_cast<long>(s_.size());
@@ -239,11 +243,16 @@ long Leapfrog<D>::resident_steps(detail::Team& team, long steps) {
     }
   moves_.resize(static_cast<std::size_t>(threads) * line_doubles, 0.0);
   events_.resize(static_cast<std::size_t>(threads) * line_doubles, 0.0);
+  busy_.assign(static_cast<std::size_t>(threads) * line_doubles, 0.0);
   long done = 0;       // steps completed in the team (written by thread 0)
   bool plain = false;  // the step after them moved, but needs the plain path's forces
-  team.run([&](int tid) {
+  // each thread's steps; returns its busy time in them (not its waits at the barriers), for the balancer
+  const auto steps_of = [&](int tid) -> std::uint64_t {
+    std::uint64_t busy = 0;
     for (long j = 0; j < steps; ++j) {
+      std::uint64_t t0 = detail::busy_clock();
       move(tid, share, dt, dt);
+      busy += detail::busy_clock() - t0;
       team.barrier(tid);
       // every thread reads the same moves and so decides alike
       if (tid == 0 && j > 0)
@@ -254,16 +263,20 @@ long Leapfrog<D>::resident_steps(detail::Team& team, long steps) {
       for (auto* e : resident_) due = due || e->resident_due(s_, max_step, tid);
       if (due) {
         if (tid == 0) plain = true;
-        return;
+        return busy;
       }
+      t0 = detail::busy_clock();
       long mine = 0;
       for (auto* e : resident_) {
         e->resident_moved(max_step, tid);
         mine += e->resident_forces(s_, tid);
       }
       events_[static_cast<std::size_t>(tid) * line_doubles] = static_cast<double>(mine);
+      busy += detail::busy_clock() - t0;
       team.barrier(tid);
+      t0 = detail::busy_clock();
       for (auto* e : resident_) e->resident_gather(s_, tid);
+      busy += detail::busy_clock() - t0;
       double events = 0.0;
       for (int t = 0; t < threads; ++t) events += events_[static_cast<std::size_t>(t) * line_doubles];
       if (tid == 0) {
@@ -271,9 +284,12 @@ long Leapfrog<D>::resident_steps(detail::Team& team, long steps) {
         s_.t = static_cast<double>(s_.step) * dt;
         done = j + 1;
       }
-      if (events > 0.0) return;
+      if (events > 0.0) return busy;
     }
-  });
+    return busy;
+  };
+  team.run([&](int tid) { busy_[static_cast<std::size_t>(tid) * line_doubles] = static_cast<double>(steps_of(tid)); });
+  balancer_->add(team, share, busy_.data(), line_doubles, done);
   for (auto* e : resident_) e->resident_end(s_);
   if (plain) {  // moved, nothing else: the plain path's forces, guard and after_move
     for (auto* e : fused_force_) e->add_fused_forces(s_);

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -47,7 +48,7 @@ class Team {
   int size() const { return size_; }
 
   /// The team's partition of n particles: thread t takes [b[t], b[t + 1]), contiguous shares in multiples
-  /// of share_grain, equal unless set_weights says otherwise. Call outside `run`. Every per-particle kernel
+  /// of share_grain, equal unless set_weights or set_balance says otherwise. Call outside `run`. Every per-particle kernel
   /// of a step uses it, so each thread finds the positions, velocities and forces it touches in its own
   /// core's cache.
   const std::vector<long>& bounds(long n);
@@ -92,6 +93,13 @@ class Team {
   /// Results do not depend on it (every particle's forces are summed in a fixed order whoever computes
   /// them): tests use it to check that. Also PMFRAG_THREAD_WEIGHTS, e.g. "1,3".
   static void set_weights(std::vector<double> weights);
+  /// True if set_weights or PMFRAG_THREAD_WEIGHTS gave weights for teams of `threads`: bounds() follows them.
+  static bool weights_fixed(int threads);
+  /// This team's shares in proportion to `weights` as measured (LoadBalancer), unless weights_fixed.
+  void set_balance(std::vector<double> weights);
+  /// The partition of n particles into `threads` shares in proportion to `weights` (empty: equal), as
+  /// bounds() makes it.
+  static std::vector<long> partition(long n, int threads, const std::vector<double>& weights);
 
  private:
   using Fn = void (*)(void*, int);
@@ -128,10 +136,21 @@ class Team {
   std::unique_ptr<Counter[]> done_;  ///< per worker: the generation it last finished (written by it)
   std::unique_ptr<Counter[]> passed_;  ///< per thread: barriers it has reached (written by it)
   std::vector<std::thread> workers_;
+  std::vector<double> balance_;  ///< measured weights (set_balance); empty: equal
   long bounds_n_ = -1;  ///< the particle count bounds_ was made for (-1: stale)
   unsigned bounds_generation_ = 0;  ///< the weights' generation bounds_ was made with
   std::vector<long> bounds_;
 };
+
+/// A clock for comparing the threads' busy times: the time-stamp counter where there is one (~20 cycles a
+/// read; invariant and common to all cores on the CPUs this runs on), else steady_clock's nanoseconds.
+inline std::uint64_t busy_clock() {
+#if defined(__x86_64__) || defined(__i386__)
+  return __builtin_ia32_rdtsc();
+#else
+  return static_cast<std::uint64_t>(std::chrono::steady_clock::now().time_since_epoch().count());
+#endif
+}
 
 /// Thread tid's share [begin, end) of n items, in multiples of `grain` (except the last).
 inline std::pair<long, long> share(long n, int tid, int threads, long grain = 1) {

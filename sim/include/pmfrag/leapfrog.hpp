@@ -13,6 +13,7 @@ namespace pmfrag {
 
 namespace detail {
 class ThreadTuner;
+class LoadBalancer;
 class Team;
 }
 
@@ -86,6 +87,8 @@ class Leapfrog {
   bool assigned_ = false;       ///< the first fused force sets f (stage::assigns_forces): the move keeps it
   bool uniform_ = true;  ///< every step so far had the same dt: time = step x dt exactly
   std::unique_ptr<detail::ThreadTuner> tuner_;  ///< how many threads each step runs on
+  std::unique_ptr<detail::LoadBalancer> balancer_;  ///< each thread's share of the particles
+  std::vector<double> busy_;  ///< per thread, a cache line: its busy time in the last resident steps
 };
 
 }  // namespace pmfrag

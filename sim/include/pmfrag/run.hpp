@@ -60,8 +60,9 @@ RunResult run_scene(const Scene& scene, const RunOptions& options);
 /// PMFRAG_MIN_PARTICLES_PER_THREAD) fixes the count instead: all threads, but at most one per `particles`
 /// particles. 1 splits any system among all threads (the 1-vs-2-threads tests use it); 0 measures again.
 void set_min_particles_per_thread(std::size_t particles);
-/// Each step thread's share of the particles, in proportion (e.g. {1, 3}); empty: equal shares. For this
-/// calling thread's runs. The trajectory does not depend on it (tests check that); PMFRAG_THREAD_WEIGHTS too.
+/// Each step thread's share of the particles, in proportion (e.g. {1, 3}); empty: shares that follow the
+/// threads' measured speeds (equal to start with). For this calling thread's runs. The trajectory does not
+/// depend on it (tests check that); PMFRAG_THREAD_WEIGHTS too.
 void set_thread_weights(std::vector<double> weights);
 /// How many threads the step kernels use for a system of this many particles when the count is not
 /// measured: outside a run's steps, or with set_min_particles_per_thread().
