@@ -242,7 +242,6 @@ long Leapfrog<D>::resident_steps(detail::Team& team, long steps) {
       return 1;
     }
   moves_.resize(static_cast<std::size_t>(threads) * line_doubles, 0.0);
-  events_.resize(static_cast<std::size_t>(threads) * line_doubles, 0.0);
   busy_.assign(static_cast<std::size_t>(threads) * line_doubles, 0.0);
   long done = 0;       // steps completed in the team (written by thread 0)
   bool plain = false;  // the step after them moved, but needs the plain path's forces
@@ -253,11 +252,18 @@ long Leapfrog<D>::resident_steps(detail::Team& team, long steps) {
       std::uint64_t t0 = detail::busy_clock();
       move(tid, share, dt, dt);
       busy += detail::busy_clock() - t0;
-      team.barrier(tid);
+      const double* slot = moves_.data() + static_cast<std::size_t>(tid) * line_doubles;
+      team.barrier(tid, slot, 2);  // the move's largest squared component and bad count go with the arrival
       // every thread reads the same moves and so decides alike
       if (tid == 0 && j > 0)
         for (auto* e : resident_) e->resident_end_step(s_);  // step j-1: every thread's gather is in
-      const auto [bad, max2] = moved(threads);
+      long bad = 0;
+      double max2 = 0.0;
+      for (int t = 0; t < threads; ++t) {
+        const double* in = team.published(t, tid);
+        max2 = std::max(max2, in[0]);
+        bad += static_cast<long>(in[1]);
+      }
       const double max_step = std::sqrt(D * max2);
       bool due = bad > 0;
       for (auto* e : resident_) due = due || e->resident_due(s_, max_step, tid);
@@ -271,14 +277,14 @@ long Leapfrog<D>::resident_steps(detail::Team& team, long steps) {
         e->resident_moved(max_step, tid);
         mine += e->resident_forces(s_, tid);
       }
-      events_[static_cast<std::size_t>(tid) * line_doubles] = static_cast<double>(mine);
       busy += detail::busy_clock() - t0;
-      team.barrier(tid);
+      const double found = static_cast<double>(mine);
+      team.barrier(tid, &found, 1);
+      double events = 0.0;
+      for (int t = 0; t < threads; ++t) events += team.published(t, tid)[0];
       t0 = detail::busy_clock();
       for (auto* e : resident_) e->resident_gather(s_, tid);
       busy += detail::busy_clock() - t0;
-      double events = 0.0;
-      for (int t = 0; t < threads; ++t) events += events_[static_cast<std::size_t>(t) * line_doubles];
       if (tid == 0) {
         ++s_.step;
         s_.t = static_cast<double>(s_.step) * dt;

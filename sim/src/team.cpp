@@ -179,9 +179,12 @@ void Team::work(int tid) {
   }
 }
 
-void Team::barrier(int tid) {
+void Team::barrier(int tid) { barrier(tid, nullptr, 0); }
+
+void Team::barrier(int tid, const double* data, std::size_t count) {
   Counter& mine = passed_[static_cast<std::size_t>(tid)];
   const std::uint64_t pass = mine.value.load(std::memory_order_relaxed) + 1;
+  std::copy_n(data, std::min(count, max_published), mine.data[pass & 1]);
   mine.value.store(pass, std::memory_order_release);
   for (int t = 0; t < size_; ++t)
     if (t != tid)
