@@ -255,8 +255,6 @@ long Leapfrog<D>::resident_steps(detail::Team& team, long steps) {
       const double* slot = moves_.data() + static_cast<std::size_t>(tid) * line_doubles;
       team.barrier(tid, slot, 2);  // the move's largest squared component and bad count go with the arrival
       // every thread reads the same moves and so decides alike
-      if (tid == 0 && j > 0)
-        for (auto* e : resident_) e->resident_end_step(s_);  // step j-1: every thread's gather is in
       long bad = 0;
       double max2 = 0.0;
       for (int t = 0; t < threads; ++t) {
@@ -285,16 +283,14 @@ long Leapfrog<D>::resident_steps(detail::Team& team, long steps) {
       t0 = detail::busy_clock();
       for (auto* e : resident_) e->resident_gather(s_, tid);
       busy += detail::busy_clock() - t0;
-      if (tid == 0) {
-        ++s_.step;
-        s_.t = static_cast<double>(s_.step) * dt;
-        done = j + 1;
-      }
+      if (tid == 0) done = j + 1;  // the clock is advanced after the block: its line is read by every move
       if (events > 0.0) return busy;
     }
     return busy;
   };
   team.run([&](int tid) { busy_[static_cast<std::size_t>(tid) * line_doubles] = static_cast<double>(steps_of(tid)); });
+  s_.step += done;
+  s_.t = static_cast<double>(s_.step) * dt;
   balancer_->add(team, share, busy_.data(), line_doubles, done);
   for (auto* e : resident_) e->resident_end(s_);
   if (plain) {  // moved, nothing else: the plain path's forces, guard and after_move
@@ -302,9 +298,8 @@ long Leapfrog<D>::resident_steps(detail::Team& team, long steps) {
     finish_step(dt, threads);
     return done + 1;
   }
-  // the last step's forces are complete: settle its events (bonds to retire), then its tallies
+  // the last step's forces are complete: settle its events (bonds to retire)
   for (auto* e : resident_) e->resident_settle(s_);
-  for (auto* e : resident_) e->resident_end_step(s_);
   return done;
 }
 

@@ -77,7 +77,7 @@ class Effect {
   // particles [bounds[t], bounds[t + 1]); per step: the move, a barrier, resident_due, resident_moved and
   // resident_forces, a barrier, resident_gather. A step in which something happens (a bond breaks, a list
   // may be due) leaves the block and is finished on the plain path, so the trajectory is bitwise the one
-  // step() gives.
+  // step() gives. s.step and s.t stay at the block's start until it ends (every move reads their cache line).
   /// Before a block, outside the team: ready the threads' work; false if the next step must be plain.
   virtual bool resident_begin(State<D>&, const std::vector<long>& /*bounds*/) { return false; }
   /// Every thread alike, after the move (max_step as for after_move): true if this step needs the plain
@@ -90,12 +90,10 @@ class Effect {
   virtual long resident_forces(State<D>&, int /*tid*/) { return 0; }
   /// Thread tid, after a barrier: what needs every thread's resident_forces (gathers into its particles).
   virtual void resident_gather(State<D>&, int /*tid*/) {}
-  /// One thread, once the step's forces are complete everywhere (s.step advanced): the serial rest of
-  /// add_forces for a step without events (tallies).
-  virtual void resident_end_step(State<D>&) {}
-  /// After the block, outside the team: keep what the threads recorded (e.g. the moved bound).
+  /// After the block, outside the team (s.step advanced past its steps): keep what the threads recorded
+  /// (e.g. the moved bound), tally its steps in order (e.g. the boundary's work).
   virtual void resident_end(State<D>&) {}
-  /// For a step that ended the block with events: settle them as add_forces would (then resident_end_step).
+  /// For a step that ended the block with events: settle them as add_forces would.
   virtual void resident_settle(State<D>&) {}
 
   /// `max_step` bounds how far any particle moved in this step [cm] (a cheap bound for Verlet lists).
