@@ -5,6 +5,7 @@
 #include "thread_tuner.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -246,12 +247,13 @@ long Leapfrog<D>::resident_steps(detail::Team& team, long steps) {
   long done = 0;       // steps completed in the team (written by thread 0)
   bool plain = false;  // the step after them moved, but needs the plain path's forces
   // each thread's steps; returns its busy time in them (not its waits at the barriers), for the balancer
-  const auto steps_of = [&](int tid) -> std::uint64_t {
-    std::uint64_t busy = 0;
+  // (per phase: the move, and the forces with the gather)
+  const auto steps_of = [&](int tid) -> std::array<std::uint64_t, 2> {
+    std::array<std::uint64_t, 2> busy{0, 0};
     for (long j = 0; j < steps; ++j) {
       std::uint64_t t0 = detail::busy_clock();
       move(tid, share, dt, dt);
-      busy += detail::busy_clock() - t0;
+      busy[0] += detail::busy_clock() - t0;
       const double* slot = moves_.data() + static_cast<std::size_t>(tid) * line_doubles;
       team.barrier(tid, slot, 2);  // the move's largest squared component and bad count go with the arrival
       // every thread reads the same moves and so decides alike
@@ -275,20 +277,24 @@ long Leapfrog<D>::resident_steps(detail::Team& team, long steps) {
         e->resident_moved(max_step, tid);
         mine += e->resident_forces(s_, tid);
       }
-      busy += detail::busy_clock() - t0;
+      busy[1] += detail::busy_clock() - t0;
       const double found = static_cast<double>(mine);
       team.barrier(tid, &found, 1);
       double events = 0.0;
       for (int t = 0; t < threads; ++t) events += team.published(t, tid)[0];
       t0 = detail::busy_clock();
       for (auto* e : resident_) e->resident_gather(s_, tid);
-      busy += detail::busy_clock() - t0;
+      busy[1] += detail::busy_clock() - t0;
       if (tid == 0) done = j + 1;  // the clock is advanced after the block: its line is read by every move
       if (events > 0.0) return busy;
     }
     return busy;
   };
-  team.run([&](int tid) { busy_[static_cast<std::size_t>(tid) * line_doubles] = static_cast<double>(steps_of(tid)); });
+  team.run([&](int tid) {
+    const auto busy = steps_of(tid);
+    for (std::size_t p = 0; p < busy.size(); ++p)
+      busy_[static_cast<std::size_t>(tid) * line_doubles + p] = static_cast<double>(busy[p]);
+  });
   s_.step += done;
   s_.t = static_cast<double>(s_.step) * dt;
   balancer_->add(team, share, busy_.data(), line_doubles, done);
