@@ -15,15 +15,12 @@ namespace {
 
 constexpr long plate = 2698;  // the paper's slit plate
 
-// busy[t * 8 + p]: each thread's busy time in phase p (0: the move, 1: the forces), one cache line apart as
-// Leapfrog keeps them
-std::vector<double> busy_per_thread(double move0, double forces0, double move1, double forces1) {
+// busy[t * 8]: each thread's busy time, one cache line apart as Leapfrog keeps them
+std::vector<double> busy_per_thread(double t0, double t1) {
   std::vector<double> b(16, 0.0);
-  b[0] = move0, b[1] = forces0, b[8] = move1, b[9] = forces1;
+  b[0] = t0, b[8] = t1;
   return b;
 }
-// the same share of each phase on both threads
-std::vector<double> busy_per_thread(double t0, double t1) { return busy_per_thread(0.1 * t0, 0.9 * t0, 0.1 * t1, 0.9 * t1); }
 
 TEST(LoadBalancer, SharesFollowTheMeasuredSpeeds) {
   Team team(2);
@@ -43,19 +40,6 @@ TEST(LoadBalancer, SharesFollowTheMeasuredSpeeds) {
   const auto even = busy_per_thread(1.5e4, 1.5e4);
   lb.add(team, moved, even.data(), 8, LoadBalancer::window);
   EXPECT_EQ(team.bounds(plate), moved);
-}
-
-TEST(LoadBalancer, PhasesSlowOnDifferentCoresAreWeighedByTheirLength) {
-  // Thread 0 is slower in the forces, thread 1 in the move; a step lasts the slower move plus the slower
-  // forces. Per particle (thread 0 / 1): move 0.744 / 1.477, forces 7.44 / 5.91. Shares by the whole step's
-  // speeds (1280) would take 11,618 a step, by the move's (1792) 14,671, by the forces' (1216) 11,236:
-  // the last, against 12,000 now.
-  Team team(2);
-  const std::vector<long> equal = team.bounds(plate);
-  LoadBalancer lb;
-  const auto busy = busy_per_thread(1.0e3, 1.0e4, 2.0e3, 8.0e3);
-  lb.add(team, equal, busy.data(), 8, LoadBalancer::window);
-  EXPECT_EQ(team.bounds(plate), (std::vector<long>{0, 1216, plate}));
 }
 
 TEST(LoadBalancer, SmallGainsDoNotMoveTheShares) {

@@ -28,9 +28,11 @@ struct Kick {
 // variables in memory, and the two-thread plate's pass took 15,000 cycles instead of 3,000 (measured); kept
 // out of line so every caller runs the same, vectorized code.
 // ZeroF: f is used up here (the next evaluation adds into zeros); otherwise the first fused force sets it.
+// The positions are read from xin and written to xout (the same array, or the other of resident steps' two).
 template <bool ZeroF>
-[[gnu::noinline]] Kick kick_drift(double* __restrict x, double* __restrict v, double* __restrict f, const double* __restrict inv_mass,
-                       long b, long e, double h, double dt, double component_limit2) {
+[[gnu::noinline]] Kick kick_drift(const double* xin, double* xout, double* __restrict v, double* __restrict f,
+                                  const double* __restrict inv_mass, long b, long e, double h, double dt,
+                                  double component_limit2) {
   long bad = 0;
   double max2 = 0.0;
 #pragma omp simd reduction(+ : bad) reduction(max : max2)
@@ -38,7 +40,7 @@ template <bool ZeroF>
     const double vj = v[j] + (h * inv_mass[j]) * f[j];
     const double dx = dt * vj;
     v[j] = vj;
-    x[j] += dx;
+    xout[j] = xin[j] + dx;
     if constexpr (ZeroF) f[j] = 0.0;
     const double d2 = dx * dx;
     bad += !(d2 <= component_limit2);
@@ -129,12 +131,12 @@ void Leapfrog<D>::step(double dt) {
 // finish_step decides. The largest component move gives sqrt(D) x it as the bound the neighbour lists use.
 // Each thread writes its count and largest move to a cache line of its own in moves_.
 template <int D>
-void Leapfrog<D>::move(int tid, const std::vector<long>& share, double h, double dt) {
+void Leapfrog<D>::move(int tid, const std::vector<long>& share, double h, double dt, const double* xin, double* xout) {
   const double component_limit2 = 0.25 * s_.r0 * s_.r0 / D;
   const long first = share[static_cast<std::size_t>(tid)], last = share[static_cast<std::size_t>(tid) + 1];
   const auto kick = assigned_ ? kick_drift<false> : kick_drift<true>;
-  const Kick k = kick(s_.x.front().data(), s_.v.front().data(), s_.f.front().data(), inv_mass_dof_.data(), first * D,
-                      last * D, h, dt, component_limit2);
+  const Kick k = kick(xin, xout, s_.v.front().data(), s_.f.front().data(), inv_mass_dof_.data(), first * D, last * D,
+                      h, dt, component_limit2);
   double* slot = moves_.data() + static_cast<std::size_t>(tid) * line_doubles;
   slot[0] = k.max2;
   slot[1] = static_cast<double>(k.bad);
@@ -164,7 +166,8 @@ int Leapfrog<D>::plain_step(double dt) {
   const std::vector<long>& share = team.bounds(n);
   // The move is handed to the team's next pass: the fused forces' (the bonds') if any, so the two cost one
   // hand-out (team.hpp). Each thread moves its own share, the particles whose forces it assembles.
-  auto kick = [&](int tid) { move(tid, share, h, dt); };
+  double* x = s_.x.front().data();
+  auto kick = [&](int tid) { move(tid, share, h, dt, x, x); };
   team.defer(kick);
   try {
     for (auto* e : fused_force_) e->add_fused_forces(s_);
@@ -226,11 +229,15 @@ long Leapfrog<D>::advance(long steps) {
 
 // Up to `steps` steps in one pass of the team (effects.hpp, "Resident steps"): a hand-out and the wait for
 // the workers cost 0.7-1.2 us between this VM's virtual cores and a step of the plate on two threads is
-// ~5 us of work, while a barrier costs 0.1-0.5 us; and nothing runs on one thread alone between steps, so no
-// core reads the others' particles but at the edges of its share. A step in which something happens (the
-// guard's component test fails, a neighbour list may be due, a bond breaks) ends the block and is finished
-// on the plain path. Each thread's busy time in the block goes to the load balancer (load_balancer.hpp),
-// which may move the shares before the next block. Returns the steps taken (at least one).
+// ~5 us of work; and nothing runs on one thread alone between steps, so no core reads the others' particles
+// but at the edges of its share. One barrier a step, after the move. Before it, a thread has computed its
+// particles' complete forces (the effects' resident_forces need no other thread) and moved them; after it,
+// every thread knows every move and the events of the forces before it, and reads the others' new
+// positions. Positions alternate between s.x and a second buffer (a step reads one and writes the other),
+// so a thread may move on while another still reads the last positions. The move's guard or a due list
+// (after a barrier) or a broken bond (known at the next barrier, after the next move, which is the same
+// whatever the bond: it was already too long to pull) ends the block; the step is finished on the plain
+// path. Each thread's busy time goes to the load balancer. Returns the steps taken (at least one).
 template <int D>
 long Leapfrog<D>::resident_steps(detail::Team& team, long steps) {
   const long n = static_cast<long>(s_.size());
@@ -244,68 +251,74 @@ long Leapfrog<D>::resident_steps(detail::Team& team, long steps) {
     }
   moves_.resize(static_cast<std::size_t>(threads) * line_doubles, 0.0);
   busy_.assign(static_cast<std::size_t>(threads) * line_doubles, 0.0);
-  long done = 0;       // steps completed in the team (written by thread 0)
-  bool plain = false;  // the step after them moved, but needs the plain path's forces
-  // each thread's steps; returns its busy time in them (not its waits at the barriers), for the balancer
-  // (per phase: the move, and the forces with the gather)
-  const auto steps_of = [&](int tid) -> std::array<std::uint64_t, 2> {
-    std::array<std::uint64_t, 2> busy{0, 0};
-    for (long j = 0; j < steps; ++j) {
-      std::uint64_t t0 = detail::busy_clock();
-      move(tid, share, dt, dt);
-      busy[0] += detail::busy_clock() - t0;
-      const double* slot = moves_.data() + static_cast<std::size_t>(tid) * line_doubles;
-      team.barrier(tid, slot, 2);  // the move's largest squared component and bad count go with the arrival
-      // every thread reads the same moves and so decides alike
+  x_alt_.resize(s_.size());
+  double* const x[2] = {s_.x.front().data(), x_alt_.front().data()};  // step j reads x[j & 1]
+  long done = 0;  // steps whose forces are complete (written by thread 0)
+  enum class End { all, due, events } end = End::all;  // written by thread 0
+  const auto steps_of = [&](int tid) -> std::uint64_t {  // returns the thread's busy time (not its waits)
+    std::uint64_t busy = 0;
+    double found = 0.0;  // bonds the thread's last forces found too long
+    for (long j = 0;; ++j) {
+      double* slot = moves_.data() + static_cast<std::size_t>(tid) * line_doubles;
+      if (j < steps) {
+        const std::uint64_t t0 = detail::busy_clock();
+        move(tid, share, dt, dt, x[j & 1], x[(j + 1) & 1]);
+        busy += detail::busy_clock() - t0;
+      } else {
+        slot[0] = slot[1] = 0.0;  // no move: only the last forces' events are exchanged
+      }
+      slot[2] = found;
+      team.barrier(tid, slot, 3);  // the move's largest squared component, bad count and events go with it
+      // every thread reads the same numbers and so decides alike
       long bad = 0;
-      double max2 = 0.0;
+      double max2 = 0.0, events = 0.0;
       for (int t = 0; t < threads; ++t) {
         const double* in = team.published(t, tid);
         max2 = std::max(max2, in[0]);
         bad += static_cast<long>(in[1]);
+        events += in[2];
       }
+      if (events > 0.0) {  // the forces at x[j & 1] broke bonds: settle them there, then finish step j
+        if (tid == 0) end = End::events;
+        return busy;
+      }
+      if (j == steps) return busy;
       const double max_step = std::sqrt(D * max2);
       bool due = bad > 0;
       for (auto* e : resident_) due = due || e->resident_due(s_, max_step, tid);
       if (due) {
-        if (tid == 0) plain = true;
+        if (tid == 0) end = End::due;
         return busy;
       }
-      t0 = detail::busy_clock();
+      const std::uint64_t t0 = detail::busy_clock();
       long mine = 0;
       for (auto* e : resident_) {
         e->resident_moved(max_step, tid);
-        mine += e->resident_forces(s_, tid);
+        mine += e->resident_forces(s_, x[(j + 1) & 1], tid);
       }
-      busy[1] += detail::busy_clock() - t0;
-      const double found = static_cast<double>(mine);
-      team.barrier(tid, &found, 1);
-      double events = 0.0;
-      for (int t = 0; t < threads; ++t) events += team.published(t, tid)[0];
-      t0 = detail::busy_clock();
       for (auto* e : resident_) e->resident_gather(s_, tid);
-      busy[1] += detail::busy_clock() - t0;
+      busy += detail::busy_clock() - t0;
+      found = static_cast<double>(mine);
       if (tid == 0) done = j + 1;  // the clock is advanced after the block: its line is read by every move
-      if (events > 0.0) return busy;
     }
-    return busy;
   };
-  team.run([&](int tid) {
-    const auto busy = steps_of(tid);
-    for (std::size_t p = 0; p < busy.size(); ++p)
-      busy_[static_cast<std::size_t>(tid) * line_doubles + p] = static_cast<double>(busy[p]);
-  });
+  team.run([&](int tid) { busy_[static_cast<std::size_t>(tid) * line_doubles] = static_cast<double>(steps_of(tid)); });
+  // s.x holds the positions of the last step whose forces are complete
+  if (done & 1) std::swap(s_.x, x_alt_);
   s_.step += done;
   s_.t = static_cast<double>(s_.step) * dt;
   balancer_->add(team, share, busy_.data(), line_doubles, done);
   for (auto* e : resident_) e->resident_end(s_);
-  if (plain) {  // moved, nothing else: the plain path's forces, guard and after_move
+  if (end == End::events) {
+    for (auto* e : resident_) e->resident_settle(s_);  // the bonds to retire, at the positions that broke them
+    if (done == steps) return done;                    // (found after the last step: no move followed)
+  }
+  if (end != End::all) {  // step done + 1 moved, nothing else: the plain path's forces, guard and after_move
+    std::swap(s_.x, x_alt_);
     for (auto* e : fused_force_) e->add_fused_forces(s_);
     finish_step(dt, threads);
     return done + 1;
   }
-  // the last step's forces are complete: settle its events (bonds to retire)
-  for (auto* e : resident_) e->resident_settle(s_);
   return done;
 }
 

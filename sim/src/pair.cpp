@@ -105,15 +105,27 @@ class PairEffect final : public Effect<D> {
     }
   }
 
-  // Resident steps (effects.hpp): the bonded model's bonds and contacts, each thread on its particles.
+  // Resident steps (effects.hpp): the bonded model's bonds and contacts, each thread on its particles. A
+  // thread evaluates every contact its particles are in (a pair across two threads' shares twice, with the
+  // same arithmetic, so the same bits) into its own copy of the pair forces, and sums its particles' from it.
   bool resident_begin(State<D>&, const std::vector<long>& bounds) override {
     if (spec_.model != PairModel::bonded) return false;
     stencil_.prepare(bounds);
-    moved_of_.assign((bounds.size() - 1) * 8, moved_bound_);  // a cache line per thread
+    const std::size_t threads = bounds.size() - 1;
+    moved_of_.assign(threads * 8, moved_bound_);  // a cache line per thread
     const std::vector<int>& touched = list_.touched;
     touched_from_.clear();
     for (long b : bounds)
       touched_from_.push_back(std::lower_bound(touched.begin(), touched.end(), b) - touched.begin());
+    contacts_of_.resize(threads);
+    for (std::size_t t = 0; t < threads; ++t) {
+      ThreadContacts& c = contacts_of_[t];
+      c.pairs.clear();
+      const auto mine = [&](int p) { return p >= bounds[t] && p < bounds[t + 1]; };
+      for (std::size_t p = 0; p < list_.size(); ++p)
+        if (mine(list_.i[p]) || mine(list_.j[p])) c.pairs.push_back(static_cast<int>(p));
+      for (auto& F : c.force) F.resize(list_.size());
+    }
     return true;
   }
   bool resident_due(const State<D>&, double max_step, int tid) const override {
@@ -122,23 +134,26 @@ class PairEffect final : public Effect<D> {
   void resident_moved(double max_step, int tid) override {
     if (uses_list_) moved_of_[static_cast<std::size_t>(tid) * 8] += max_step;
   }
-  long resident_forces(State<D>& s, int tid) override {
+  long resident_forces(State<D>& s, const double* x, int tid) override {
     const double cut2 = cutoff_ * cutoff_;
     return detail::with_law(laws_, nphase_ == 1, [&](const auto& law) {
-      const long mine = stencil_.add_forces_of(tid, s.x.front().data(), s.f.front().data(), law, cut2, inv_rmin_);
+      const long mine = stencil_.add_forces_of(tid, x, s.f.front().data(), law, cut2, inv_rmin_);
       if (mine > 0) broke_of_team_.fetch_add(mine, std::memory_order_relaxed);
-      if (uses_list_ && list_.size() > 0) {
-        const int threads = static_cast<int>(touched_from_.size()) - 1;
-        const auto [first, last] = detail::share(static_cast<long>(list_.size()), tid, threads);
-        contact_pair_forces(s, law.with_ids(list_.law.data()), first, last);
+      ThreadContacts& c = contacts_of_[static_cast<std::size_t>(tid)];
+      if (uses_list_ && !c.pairs.empty()) {
+        const auto contact_law = law.with_ids(list_.law.data());
+        typename detail::PairTable<D>::Forces F;
+        for (int k = 0; k < D; ++k) F[static_cast<std::size_t>(k)] = c.force[k].data();
+        for (const int p : c.pairs) {
+          double out[D];
+          contact_pair_force(x, contact_law, static_cast<std::size_t>(p), out);
+          for (int k = 0; k < D; ++k) c.force[k][static_cast<std::size_t>(p)] = out[k];
+        }
+        list_.gather_touched(s.f.front().data(), touched_from_[static_cast<std::size_t>(tid)],
+                             touched_from_[static_cast<std::size_t>(tid) + 1], F);
       }
       return mine;
     });
-  }
-  void resident_gather(State<D>& s, int tid) override {
-    if (uses_list_ && list_.size() > 0)
-      list_.gather_touched(s.f.front().data(), touched_from_[static_cast<std::size_t>(tid)],
-                           touched_from_[static_cast<std::size_t>(tid) + 1]);
   }
   void resident_end(State<D>&) override {
     if (uses_list_) moved_bound_ = moved_of_.front();
@@ -276,36 +291,41 @@ class PairEffect final : public Effect<D> {
   }
 
   // The bonded model's contacts: unbonded pairs closer than r0 feel the law's repulsive branch. A select,
-  // not a branch, decides whether a pair acts, so it vectorizes. Pairs [first, last) into list_.force.
+  // not a branch, decides whether a pair acts, so the loop below vectorizes. Pair u's force on i: out.
+  template <class Law>
+  void contact_pair_force(const double* x, const Law& law, std::size_t u, double (&out)[D]) const {
+    const std::size_t a = static_cast<std::size_t>(list_.i[u]) * D, b = static_cast<std::size_t>(list_.j[u]) * D;
+    const double d0 = x[a] - x[b], d1 = x[a + 1] - x[b + 1];
+    const double d2 = D == 3 ? x[a + D - 1] - x[b + D - 1] : 0.0;
+    const double r2 = d0 * d0 + d1 * d1 + d2 * d2;
+    const double rc = contact_reach_[static_cast<std::size_t>(list_.law[u])];
+    const bool act = r2 < rc * rc;
+    const double inv = 1.0 / std::sqrt(r2);
+    const double ie = std::min(inv, inv_rmin_);  // force held constant inside r_min (Sec. 4.2)
+    const double mag = law.magnitude(u, ie) * inv;  // > 0 repulsive
+    const double fr = act ? mag : 0.0;
+    out[0] = fr * d0;
+    out[1] = fr * d1;
+    if constexpr (D == 3) out[D - 1] = fr * d2;
+  }
+  // Pairs [first, last) into list_.force.
   template <class Law>
   void contact_pair_forces(const State<D>& s, const Law law, long first, long last) {
-    const double inv_rmin = inv_rmin_;
-    const int* __restrict pi = list_.i.data();
-    const int* __restrict pj = list_.j.data();
-    const int* __restrict lid = list_.law.data();
-    const double* __restrict reach = contact_reach_.data();
-    const double* __restrict x = s.x.front().data();
+    const double* x = s.x.front().data();
     double* __restrict f0 = list_.force[0].data();
     double* __restrict f1 = list_.force[1].data();
     double* __restrict f2 = list_.force[D - 1].data();
 #pragma omp simd
     for (long p = first; p < last; ++p) {
       const std::size_t u = static_cast<std::size_t>(p);
-      const std::size_t a = static_cast<std::size_t>(pi[u]) * D, b = static_cast<std::size_t>(pj[u]) * D;
-      const double d0 = x[a] - x[b], d1 = x[a + 1] - x[b + 1];
-      const double d2 = D == 3 ? x[a + D - 1] - x[b + D - 1] : 0.0;
-      const double r2 = d0 * d0 + d1 * d1 + d2 * d2;
-      const double rc = reach[lid[u]];
-      const bool act = r2 < rc * rc;
-      const double inv = 1.0 / std::sqrt(r2);
-      const double ie = std::min(inv, inv_rmin);  // force held constant inside r_min (Sec. 4.2)
-      const double mag = law.magnitude(u, ie) * inv;  // > 0 repulsive
-      const double fr = act ? mag : 0.0;
-      f0[u] = fr * d0;
-      f1[u] = fr * d1;
-      if constexpr (D == 3) f2[u] = fr * d2;
+      double out[D];
+      contact_pair_force(x, law, u, out);
+      f0[u] = out[0];
+      f1[u] = out[1];
+      if constexpr (D == 3) f2[u] = out[D - 1];
     }
   }
+
 
   template <class Law>
   void contact_kernel(State<D>& s, const Law law) {
@@ -452,6 +472,11 @@ class PairEffect final : public Effect<D> {
   std::vector<double> phi_break_;
   long broke_ = 0;  ///< bonds the last add_fused_forces found too long (retired by add_forces)
   std::atomic<long> broke_of_team_{0};  ///< the same, summed by the threads of resident_forces
+  struct alignas(64) ThreadContacts {  ///< resident steps: a thread's contacts (a cache line of its own)
+    std::vector<int> pairs;            ///< the contacts its particles are in, ascending
+    std::vector<double> force[D];      ///< its copy of those pairs' forces (by pair index)
+  };
+  std::vector<ThreadContacts> contacts_of_;
   std::vector<double> moved_of_;        ///< resident steps: each thread's copy of moved_bound_ (cm)
   std::vector<long> touched_from_;      ///< resident steps: thread t gathers list_.touched[from[t], from[t+1])
   long first_break_step_ = -1;

@@ -7,6 +7,7 @@
 #include "pmfrag/pair_law.hpp"
 #include "team.hpp"
 
+#include <array>
 #include <Eigen/Core>
 
 #include <cstdint>
@@ -124,15 +125,26 @@ struct PairTable {
     for (std::size_t k = 0; k < n; ++k)
       if (offset[k + 1] > offset[k]) touched.push_back(static_cast<int>(k));
   }
+  /// The pair forces' components (force, or another thread's copy of them).
+  using Forces = std::array<const double*, D>;
+  Forces forces() const {
+    Forces F;
+    for (int c = 0; c < D; ++c) F[static_cast<std::size_t>(c)] = force[c].data();
+    return F;
+  }
   /// s = the sum of particle k's pair forces, in its fixed (ascending pair) order.
-  void sum_of(std::size_t k, double (&s)[D]) const {
+  void sum_of(std::size_t k, double (&s)[D]) const { sum_of(k, s, forces()); }
+  void sum_of(std::size_t k, double (&s)[D], const Forces& F) const {
     for (int c = 0; c < D; ++c) s[c] = 0.0;
     for (int e = offset[k]; e < offset[k + 1]; ++e) {
       const int en = entry[static_cast<std::size_t>(e)];
       const std::size_t p = static_cast<std::size_t>(en >> 1);
       // j gets -F. A select, not a multiplication by a sign made with an int-to-double conversion: that
       // conversion writes half a register and stalled this loop on the previous one's result.
-      for (int c = 0; c < D; ++c) s[c] += (en & 1) ? -force[c][p] : force[c][p];
+      for (int c = 0; c < D; ++c) {
+        const double Fc = F[static_cast<std::size_t>(c)][p];
+        s[c] += (en & 1) ? -Fc : Fc;
+      }
     }
   }
   /// f_k += sum of its pairs' forces: thread tid of nt does its share of the particles.
@@ -141,11 +153,12 @@ struct PairTable {
     gather_touched(f, first, last);
   }
   /// The same for the particles touched[first, last).
-  void gather_touched(double* f, long first, long last) const {
+  void gather_touched(double* f, long first, long last) const { gather_touched(f, first, last, forces()); }
+  void gather_touched(double* f, long first, long last, const Forces& F) const {
     for (long t = first; t < last; ++t) {
       const std::size_t k = static_cast<std::size_t>(touched[static_cast<std::size_t>(t)]);
       double s[D];
-      sum_of(k, s);
+      sum_of(k, s, F);
       for (int c = 0; c < D; ++c) f[k * D + static_cast<std::size_t>(c)] += s[c];
     }
   }

@@ -74,10 +74,12 @@ class Effect {
   virtual void add_fused_forces(State<D>&) {}
 
   // Resident steps (stage::resident). The team's threads run the steps of a block together, thread t on its
-  // particles [bounds[t], bounds[t + 1]); per step: the move, a barrier, resident_due, resident_moved and
-  // resident_forces, a barrier, resident_gather. A step in which something happens (a bond breaks, a list
-  // may be due) leaves the block and is finished on the plain path, so the trajectory is bitwise the one
-  // step() gives. s.step and s.t stay at the block's start until it ends (every move reads their cache line).
+  // particles [bounds[t], bounds[t + 1]); per step: the move, a barrier, resident_due, resident_moved,
+  // resident_forces and resident_gather. One barrier a step: the positions are kept in two buffers (a step
+  // reads one and writes the other), so no thread overwrites positions another may still read, and each
+  // thread completes its own particles' forces without waiting for the others. A step in which something
+  // happens (a bond breaks, a list may be due) leaves the block and is finished on the plain path, so the
+  // trajectory is bitwise the one step() gives. s.step and s.t stay at the block's start until it ends.
   /// Before a block, outside the team: ready the threads' work; false if the next step must be plain.
   virtual bool resident_begin(State<D>&, const std::vector<long>& /*bounds*/) { return false; }
   /// Every thread alike, after the move (max_step as for after_move): true if this step needs the plain
@@ -85,10 +87,11 @@ class Effect {
   virtual bool resident_due(const State<D>&, double /*max_step*/, int /*tid*/) const { return false; }
   /// Every thread, if no effect was due: record what after_move would have (in the thread's own copy).
   virtual void resident_moved(double /*max_step*/, int /*tid*/) {}
-  /// Thread tid: forces on its particles that read only positions; returns the events (bonds found too long)
-  /// the plain add_forces must settle. Thread tid's part of add_forces otherwise.
-  virtual long resident_forces(State<D>&, int /*tid*/) { return 0; }
-  /// Thread tid, after a barrier: what needs every thread's resident_forces (gathers into its particles).
+  /// Thread tid: the complete forces on its particles at the positions x (N x D; not s.x's during a block),
+  /// with no other thread's help; returns the events (bonds found too long) the plain add_forces must
+  /// settle. Thread tid's part of add_forces otherwise.
+  virtual long resident_forces(State<D>&, const double* /*x*/, int /*tid*/) { return 0; }
+  /// Thread tid, after every effect's resident_forces on its particles: what reads their complete forces.
   virtual void resident_gather(State<D>&, int /*tid*/) {}
   /// After the block, outside the team (s.step advanced past its steps): keep what the threads recorded
   /// (e.g. the moved bound), tally its steps in order (e.g. the boundary's work).

@@ -71,7 +71,8 @@ class Leapfrog {
 
  private:
   void compute_forces();  ///< all forces at r_k, from zero
-  void move(int tid, const std::vector<long>& share, double h, double dt);
+  /// Thread tid's share of the move, positions read from xin and written to xout (may be the same).
+  void move(int tid, const std::vector<long>& share, double h, double dt, const double* xin, double* xout);
   int plain_step(double dt);  ///< one step, one team pass (returns the threads used)
   std::pair<long, double> moved(int threads) const;
   void finish_step(double dt, int threads);
@@ -88,6 +89,7 @@ class Leapfrog {
   std::unique_ptr<detail::ThreadTuner> tuner_;  ///< how many threads each step runs on
   std::unique_ptr<detail::LoadBalancer> balancer_;  ///< each thread's share of the particles
   std::vector<double> busy_;  ///< per thread, a cache line: its busy time in the last resident steps
+  std::vector<V> x_alt_;      ///< resident steps: the positions' second buffer
 };
 
 }  // namespace pmfrag
