@@ -5,7 +5,6 @@
 #include "thread_tuner.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
 #include <sstream>

@@ -326,7 +326,6 @@ class PairEffect final : public Effect<D> {
     }
   }
 
-
   template <class Law>
   void contact_kernel(State<D>& s, const Law law) {
     const long m = static_cast<long>(list_.size());

@@ -7,9 +7,9 @@
 #include "pmfrag/pair_law.hpp"
 #include "team.hpp"
 
-#include <array>
 #include <Eigen/Core>
 
+#include <array>
 #include <cstdint>
 #include <type_traits>
 #include <vector>

@@ -48,9 +48,9 @@ class Team {
   int size() const { return size_; }
 
   /// The team's partition of n particles: thread t takes [b[t], b[t + 1]), contiguous shares in multiples
-  /// of share_grain, equal unless set_weights or set_balance says otherwise. Call outside `run`. Every per-particle kernel
-  /// of a step uses it, so each thread finds the positions, velocities and forces it touches in its own
-  /// core's cache.
+  /// of share_grain, equal unless set_weights or set_balance says otherwise. Call outside `run`. Every
+  /// per-particle kernel of a step uses it, so each thread finds the positions, velocities and forces it
+  /// touches in its own core's cache.
   const std::vector<long>& bounds(long n);
 
   /// Runs body(tid) on every thread (the caller is tid 0); returns when all have finished. A deferred

@@ -81,7 +81,8 @@ class Leapfrog {
   std::vector<std::unique_ptr<Effect<D>>> effects_;
   std::vector<Effect<D>*> fused_force_, force_, after_move_, observe_, step_limit_;
   std::vector<double> inv_mass_dof_;  ///< 1/g per degree of freedom (N x D), for the flat update pass
-  std::vector<double> moves_;   ///< per thread, a cache line: the last move's largest squared component, bad count
+  std::vector<double> moves_;  ///< per thread, a cache line: the last move's largest squared component, bad
+                               ///< count (and, in resident steps, the events its last forces found)
   std::vector<Effect<D>*> resident_;
   bool resident_ok_ = true;     ///< every effect acting in a step has resident steps
   bool assigned_ = false;       ///< the first fused force sets f (stage::assigns_forces): the move keeps it
