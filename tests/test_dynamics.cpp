@@ -79,6 +79,61 @@ TEST(Dynamics, TwoParticleOscillationPeriodAndSecondOrderError) {
   EXPECT_NEAR(e1 / e2, 4.0, 0.2);
 }
 
+TEST(Dynamics, MoveUsesEachParticlesMassWhateverTheirLayout) {
+  // The move reads one inverse mass per run of equal masses, or (for many short runs) one per component:
+  // both must be Eqs. (12)-(14) with each particle's own mass. A chain of 24 bonded particles with masses m
+  // and 3m, laid out in two halves (two runs) and alternating (the per-component path), against a plain
+  // leapfrog written here, over 400 steps of a random initial velocity field.
+  const Material mat = derive_material(7, 14, 0.2);
+  const int n = 24;
+  const double dt = 2e-8;
+  for (const bool alternate : {false, true}) {
+    System sys;
+    sys.dim = 2;
+    sys.r0 = 0.2;
+    sys.cutoff = 1.7 * 0.2;
+    sys.phase_names = {"light", "heavy"};
+    sys.phase_mass = {mat.mass_g, 3.0 * mat.mass_g};
+    sys.body_names = {"chain"};
+    sys.laws = {mat.law};
+    sys.phase_pair_law = {0, 0, 0, 0};
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-50.0, 50.0);  // cm/s
+    for (int i = 0; i < n; ++i) {
+      sys.position.push_back(Vec3(0.2 * i, 0.0, 0.0));
+      sys.velocity.push_back(Vec3(u(rng), u(rng), 0.0));
+      sys.phase.push_back(alternate ? i % 2 : (i < n / 2 ? 0 : 1));
+      sys.body.push_back(0);
+      sys.site.push_back(i + 1);
+      if (i > 0) sys.bonds.push_back({i - 1, i});
+    }
+    auto lf = test::make_leapfrog<2>(sys, pair_only(), dt);
+    std::vector<Eigen::Vector2d> x(n), v(n), f(n);
+    for (int i = 0; i < n; ++i) x[i] = sys.position[i].head<2>(), v[i] = sys.velocity[i].head<2>();
+    for (int k = 0; k < 400; ++k) {
+      for (auto& fi : f) fi.setZero();
+      for (int i = 0; i + 1 < n; ++i) {
+        const Eigen::Vector2d d = x[i] - x[i + 1];
+        const double r = d.norm();
+        f[i] += mat.law.force(r) / r * d;
+        f[i + 1] -= mat.law.force(r) / r * d;
+      }
+      for (int i = 0; i < n; ++i) {
+        v[i] += (k == 0 ? 0.5 : 1.0) * dt / sys.phase_mass[static_cast<std::size_t>(sys.phase[i])] * f[i];
+        x[i] += dt * v[i];
+      }
+      lf.step();
+    }
+    double worst = 0.0, moved = 0.0;
+    for (int i = 0; i < n; ++i) {
+      worst = std::max(worst, (lf.state().x[i] - x[i]).norm());
+      moved = std::max(moved, (x[i] - sys.position[i].head<2>()).norm());
+    }
+    EXPECT_LT(worst, 1e-12) << (alternate ? "alternating" : "two halves") << ", cm";
+    EXPECT_GT(moved, 1e-4) << "cm: the chain must have moved";
+  }
+}
+
 TEST(Dynamics, FreePlateConservesEnergyAndMomentum) {
   // The slit plate with no boundaries and a random velocity field, (7,14), dt = 1e-7 s, 1e5 steps.
   Scene sc = read_scene(test::case_path("slit_plate_7_14.toml"));

@@ -28,15 +28,17 @@ struct Kick {
 // out of line so every caller runs the same, vectorized code.
 // ZeroF: f is used up here (the next evaluation adds into zeros); otherwise the first fused force sets it.
 // The positions are read from xin and written to xout (the same array, or the other of resident steps' two).
-template <bool ZeroF>
+// Uniform: every component in [b, e) has the inverse mass uniform_inv_mass (the same arithmetic as reading it
+// from inv_mass, one stream through the cache fewer).
+template <bool ZeroF, bool Uniform>
 [[gnu::noinline]] Kick kick_drift(const double* xin, double* xout, double* __restrict v, double* __restrict f,
-                                  const double* __restrict inv_mass, long b, long e, double h, double dt,
-                                  double component_limit2) {
+                                  const double* __restrict inv_mass, double uniform_inv_mass, long b, long e, double h,
+                                  double dt, double component_limit2) {
   long bad = 0;
   double max2 = 0.0;
 #pragma omp simd reduction(+ : bad) reduction(max : max2)
   for (long j = b; j < e; ++j) {
-    const double vj = v[j] + (h * inv_mass[j]) * f[j];
+    const double vj = v[j] + (h * (Uniform ? uniform_inv_mass : inv_mass[j])) * f[j];
     const double dx = dt * vj;
     v[j] = vj;
     xout[j] = xin[j] + dx;
@@ -89,6 +91,17 @@ Leapfrog<D>::Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>>
     if (e->stages() & stage::setup) e->setup(s_);
   inv_mass_dof_.resize(n * D);  // after setup: kinematic boundaries zero their particles' inverse mass
   for (std::size_t j = 0; j < n * D; ++j) inv_mass_dof_[j] = s_.inv_mass[j / D];
+  // A body of one mass has two inverse masses (its own and the kinematic boundaries' zero), in a few runs:
+  // the move then reads no array of them. Kept only while the runs are long against a vector.
+  for (std::size_t j = 0; j < n * D; ++j) {
+    const long lj = static_cast<long>(j);
+    if (mass_runs_.empty() || mass_runs_.back().inv_mass != inv_mass_dof_[j] ||
+        std::signbit(mass_runs_.back().inv_mass) != std::signbit(inv_mass_dof_[j]))
+      mass_runs_.push_back({lj, lj + 1, inv_mass_dof_[j]});
+    else
+      mass_runs_.back().end = lj + 1;
+  }
+  if (mass_runs_.size() > 8 + n * D / 256) mass_runs_.clear();
   compute_forces();
 }
 
@@ -133,9 +146,24 @@ template <int D>
 void Leapfrog<D>::move(int tid, const std::vector<long>& share, double h, double dt, const double* xin, double* xout) {
   const double component_limit2 = 0.25 * s_.r0 * s_.r0 / D;
   const long first = share[static_cast<std::size_t>(tid)], last = share[static_cast<std::size_t>(tid) + 1];
-  const auto kick = assigned_ ? kick_drift<false> : kick_drift<true>;
-  const Kick k = kick(xin, xout, s_.v.front().data(), s_.f.front().data(), inv_mass_dof_.data(), first * D, last * D,
-                      h, dt, component_limit2);
+  double* v = s_.v.front().data();
+  double* f = s_.f.front().data();
+  const long b = first * D, e = last * D;
+  Kick k{0, 0.0};
+  if (mass_runs_.empty()) {
+    k = (assigned_ ? kick_drift<false, false> : kick_drift<true, false>)(xin, xout, v, f, inv_mass_dof_.data(), 0.0, b,
+                                                                          e, h, dt, component_limit2);
+  } else {
+    const auto kick = assigned_ ? kick_drift<false, true> : kick_drift<true, true>;
+    auto run = std::upper_bound(mass_runs_.begin(), mass_runs_.end(), b,
+                                [](long j, const MassRun& r) { return j < r.end; });  // the run holding b
+    for (; run != mass_runs_.end() && run->begin < e; ++run) {
+      const Kick part = kick(xin, xout, v, f, nullptr, run->inv_mass, std::max(b, run->begin), std::min(e, run->end),
+                             h, dt, component_limit2);
+      k.bad += part.bad;
+      k.max2 = std::max(k.max2, part.max2);  // the largest of the parts' largest: the same number
+    }
+  }
   double* slot = moves_.data() + static_cast<std::size_t>(tid) * line_doubles;
   slot[0] = k.max2;
   slot[1] = static_cast<double>(k.bad);

@@ -81,6 +81,13 @@ class Leapfrog {
   std::vector<std::unique_ptr<Effect<D>>> effects_;
   std::vector<Effect<D>*> fused_force_, force_, after_move_, observe_, step_limit_;
   std::vector<double> inv_mass_dof_;  ///< 1/g per degree of freedom (N x D), for the flat update pass
+  /// Runs of degrees of freedom [begin, end) sharing one 1/g (g^-1), ascending; empty if there are too many
+  /// (then the move reads inv_mass_dof_)
+  struct MassRun {
+    long begin, end;
+    double inv_mass;
+  };
+  std::vector<MassRun> mass_runs_;
   std::vector<double> moves_;  ///< per thread, a cache line: the last move's largest squared component, bad
                                ///< count (and, in resident steps, the events its last forces found)
   std::vector<Effect<D>*> resident_;
