@@ -162,12 +162,7 @@ class BondStencil {
   template <class Law>
   long add_forces_of(int tid, const double* x, double* f, const Law& law, double cut2, double inv_rmin) {
     Work& w = plans_[current_].second[static_cast<std::size_t>(tid)];
-    // Each thread copies the positions it reads (its particles and their partners) by component: no
-    // thread waits for another.
-    for (long p = w.xlo; p < w.xhi; ++p)
-      for (int c = 0; c < D; ++c)
-        w.xs[c][static_cast<std::size_t>(p - w.xlo)] = x[static_cast<std::size_t>(p) * D + static_cast<std::size_t>(c)];
-    return single_ ? forces_of<float>(w, law, cut2, inv_rmin, f) : forces_of<double>(w, law, cut2, inv_rmin, f);
+    return single_ ? forces_of<float>(w, x, law, cut2, inv_rmin, f) : forces_of<double>(w, x, law, cut2, inv_rmin, f);
   }
 
  private:
@@ -191,13 +186,20 @@ class BondStencil {
     PairTable<D> sparse;                 ///< off-stencil bonds touching [pb, pe), in ascending global order
     std::vector<int> sparse_id;          ///< their index among all off-stencil bonds (for `alive`)
     std::vector<std::uint8_t, AlignedAllocator<std::uint8_t>> sparse_alive;
-    long xlo = 0, xhi = 0;  ///< the particles whose positions this thread reads
+    long xlo = 0, xhi = 0;  ///< the particles whose positions its sweeps read (its own and `reach` either side)
     std::vector<double, AlignedAllocator<double>> xs[D];  ///< their positions by component, from xlo
     /// per group: the first run the thread sweeps; the first not yet swept this step (written by the
     /// thread, in lines of its own)
     std::vector<std::size_t> first_run;
     std::vector<std::size_t, AlignedAllocator<std::size_t>> next_run;
   };
+
+  // Positions of particles [from, to) into the thread's copy, by component.
+  static void copy_positions(Work& w, const double* x, long from, long to) {
+    for (long p = from; p < to; ++p)
+      for (int c = 0; c < D; ++c)
+        w.xs[c][static_cast<std::size_t>(p - w.xlo)] = x[static_cast<std::size_t>(p) * D + static_cast<std::size_t>(c)];
+  }
 
   // Each thread's share of particles, its sweep buffers (zeros where no bond is ever evaluated: before
   // particle 0 and past n - offset) and its off-stencil bonds.
@@ -222,9 +224,6 @@ class BondStencil {
       w.sparse.index(n_);
       w.xlo = std::max(0L, w.pb - reach_);
       w.xhi = std::min(n, w.pe + reach_);
-      for (std::size_t u = 0; u < w.sparse.size(); ++u)
-        w.xlo = std::min<long>({w.xlo, w.sparse.i[u], w.sparse.j[u]}),
-        w.xhi = std::max<long>({w.xhi, w.sparse.i[u] + 1L, w.sparse.j[u] + 1L});
       if (w.pb >= w.pe) w.xlo = w.xhi = w.pb;
       for (auto& c : w.xs) c.assign(static_cast<std::size_t>(w.xhi - w.xlo), 0.0);
       w.sparse_alive.resize(w.sparse_id.size());
@@ -239,16 +238,27 @@ class BondStencil {
     return work;
   }
 
-  // This thread's bond forces: off-stencil bonds first, then block by block every offset's sweep and the
-  // assembly into f.
+  // This thread's bond forces at positions x (N x D): off-stencil bonds first, then block by block every
+  // offset's sweep and the assembly into f. The thread copies the positions the sweeps read (its particles
+  // and their partners) by component, no other thread waiting for it. A body whose bond forces fit the
+  // ring whole (the plate) is copied in one pass; a larger one block by block just ahead of the sweeps (the
+  // 3-D block's 1.3 MB of positions were copied whole and read back from beyond L2: one thread 1.02-1.04x;
+  // the plate copied so ran 0.96-0.97x on two threads).
   template <class Real, class Law>
-  long forces_of(Work& w, const Law& law, double cut2, double inv_rmin, double* f) {
+  long forces_of(Work& w, const double* x, const Law& law, double cut2, double inv_rmin, double* f) {
     long broke = 0;
+    long copied = w.xlo;  // the positions copied so far: [xlo, copied)
+    const auto copy_to = [&](long end) {
+      end = std::min(end, w.xhi);
+      if (copied < end) copy_positions(w, x, copied, end), copied = end;
+    };
+    if (!wraps_) copy_to(w.xhi);
     for (std::size_t u = 0; u < w.sparse_id.size(); ++u)
       w.sparse_alive[u] = sparse_alive_[static_cast<std::size_t>(w.sparse_id[u])];
-    if (w.sparse.size() > 0) sparse_pass<Real>(w, law.with_ids(w.sparse.law.data()), cut2, inv_rmin, broke);
+    if (w.sparse.size() > 0) sparse_pass<Real>(w, x, law.with_ids(w.sparse.law.data()), cut2, inv_rmin, broke);
     std::copy(w.first_run.begin(), w.first_run.end(), w.next_run.begin());
     // The bonds (i, i + o) with i < pb whose second particle is ours (none before particle 0: zeros).
+    copy_to(w.pb + reach_);
     for (std::size_t g = 0; g < groups_.size(); ++g) {
       zero(w, g, w.pb - groups_[g].offset, std::min(0L, w.pb));
       sweep_runs<Real>(w, g, law.with_ids(groups_[g].law.data()), cut2, inv_rmin, broke,
@@ -257,6 +267,7 @@ class BondStencil {
     std::size_t next_touched = 0;
     for (long b0 = w.pb; b0 < w.pe; b0 += particle_grain) {
       const long b1 = std::min(w.pe, b0 + particle_grain);
+      copy_to(b1 + reach_);  // a bond (i, i + o) of the block reaches at most `reach` past it
       for (std::size_t g = 0; g < groups_.size(); ++g)
         sweep_runs<Real>(w, g, law.with_ids(groups_[g].law.data()), cut2, inv_rmin, broke, b0, b1);
       assemble(w, b0, b1, next_touched, f);
@@ -336,24 +347,21 @@ class BondStencil {
   }
 
   template <class Real, class Law>
-  void sparse_pass(Work& w, const Law law, double cut2, double inv_rmin, long& broke) {
+  void sparse_pass(Work& w, const double* x, const Law law, double cut2, double inv_rmin, long& broke) {
     const long m = static_cast<long>(w.sparse.size());
     const int* __restrict pi = w.sparse.i.data();
     const int* __restrict pj = w.sparse.j.data();
     const std::uint8_t* __restrict alive = w.sparse_alive.data();
-    const double* __restrict x0 = w.xs[0].data();  // particle a at x[a - xlo]
-    const double* __restrict x1 = w.xs[1].data();
-    const double* __restrict x2 = w.xs[D - 1].data();
-    const std::size_t xlo = static_cast<std::size_t>(w.xlo);
+    const double* __restrict xa = x;  // N x D: the bonds' ends are anywhere in the thread's reach
     double* __restrict F0 = w.sparse.force[0].data();
     double* __restrict F1 = w.sparse.force[1].data();
     double* __restrict F2 = w.sparse.force[D - 1].data();
 #pragma omp simd reduction(+ : broke)
     for (long p = 0; p < m; ++p) {
       const std::size_t u = static_cast<std::size_t>(p);
-      const std::size_t a = static_cast<std::size_t>(pi[u]) - xlo, b = static_cast<std::size_t>(pj[u]) - xlo;
-      const double d0 = x0[a] - x0[b], d1 = x1[a] - x1[b];
-      const double d2 = D == 3 ? x2[a] - x2[b] : 0.0;
+      const std::size_t a = static_cast<std::size_t>(pi[u]) * D, b = static_cast<std::size_t>(pj[u]) * D;
+      const double d0 = xa[a] - xa[b], d1 = xa[a + 1] - xa[b + 1];
+      const double d2 = D == 3 ? xa[a + D - 1] - xa[b + D - 1] : 0.0;
       const double fr = bond_force_over_r<Real>(law, u, d0 * d0 + d1 * d1 + d2 * d2, alive[u] != 0, cut2, inv_rmin, broke);
       F0[u] = fr * d0;
       F1[u] = fr * d1;
