@@ -89,19 +89,24 @@ Leapfrog<D>::Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>>
   }
   for (auto& e : effects_)
     if (e->stages() & stage::setup) e->setup(s_);
-  inv_mass_dof_.resize(n * D);  // after setup: kinematic boundaries zero their particles' inverse mass
-  for (std::size_t j = 0; j < n * D; ++j) inv_mass_dof_[j] = s_.inv_mass[j / D];
-  // A body of one mass has two inverse masses (its own and the kinematic boundaries' zero), in a few runs:
-  // the move then reads no array of them. Kept only while the runs are long against a vector.
-  for (std::size_t j = 0; j < n * D; ++j) {
-    const long lj = static_cast<long>(j);
-    if (mass_runs_.empty() || mass_runs_.back().inv_mass != inv_mass_dof_[j] ||
-        std::signbit(mass_runs_.back().inv_mass) != std::signbit(inv_mass_dof_[j]))
-      mass_runs_.push_back({lj, lj + 1, inv_mass_dof_[j]});
+  // After setup: kinematic boundaries zero their particles' inverse mass. A body of one mass has two inverse
+  // masses (its own and the boundaries' zero), in a few runs: the move then reads no array of them. Only if
+  // the runs are short against a vector does it read one inverse mass per component.
+  for (std::size_t i = 0; i < n; ++i) {
+    const long b = static_cast<long>(i) * D;
+    const double m = s_.inv_mass[i];
+    const bool same = !mass_runs_.empty() && mass_runs_.back().inv_mass == m &&
+                      std::signbit(mass_runs_.back().inv_mass) == std::signbit(m);  // the same bits
+    if (!same)
+      mass_runs_.push_back({b, b + D, m});
     else
-      mass_runs_.back().end = lj + 1;
+      mass_runs_.back().end = b + D;
   }
-  if (mass_runs_.size() > 8 + n * D / 256) mass_runs_.clear();
+  if (mass_runs_.size() > 8 + n * D / 256) {
+    mass_runs_.clear();
+    inv_mass_dof_.resize(n * D);
+    for (std::size_t j = 0; j < n * D; ++j) inv_mass_dof_[j] = s_.inv_mass[j / D];
+  }
   compute_forces();
 }
 

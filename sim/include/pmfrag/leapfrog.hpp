@@ -80,7 +80,8 @@ class Leapfrog {
   State<D> s_;
   std::vector<std::unique_ptr<Effect<D>>> effects_;
   std::vector<Effect<D>*> fused_force_, force_, after_move_, observe_, step_limit_;
-  std::vector<double> inv_mass_dof_;  ///< 1/g per degree of freedom (N x D), for the flat update pass
+  /// 1/g per degree of freedom (N x D), for the flat update pass; only if mass_runs_ is empty
+  std::vector<double> inv_mass_dof_;
   /// Runs of degrees of freedom [begin, end) sharing one 1/g (g^-1), ascending; empty if there are too many
   /// (then the move reads inv_mass_dof_)
   struct MassRun {
