@@ -477,7 +477,7 @@ TEST(Dynamics, GuardRefusesAStepAboveTheLimit) {
     (void)run_scene(sc, ro);
     FAIL() << "dt = 1e-6 s is above the (7,14) plate's limit of 3.4e-7 s";
   } catch (const UnstableStepError& e) {
-    EXPECT_NE(std::string(e.what()).find("limit 3.37e-07 s"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("limit 3.369e-07 s"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("lattice factor 0.407"), std::string::npos) << e.what();
   }
   // Forced through, the guard stops it and names the particle and step; the frames written so far stay.
