@@ -3,6 +3,9 @@
 // each common offset, one contiguous, vectorized sweep over i evaluates every bond (i, i + o) and stores its
 // force on i at F[i]; particle i then receives F[i] - F[i - o] from that offset: no gathers, no scatters.
 // Bonds off the common offsets (around holes and slits, between bodies) go through a pair table and a gather.
+// In a large body, offsets whose bonds share no particle share one F (a group: the 3-D block's 819 and 821,
+// one lattice direction on rows of either parity); particle i then receives -F[i - o] at the offset o whose
+// bond reaches it.
 //
 // Sweep and assembly run together, one block of 256 particles at a time: a block's bond forces are summed
 // into f while they are still in L1. The assembly reads F[i - o] at most one block plus the largest offset
@@ -46,33 +49,70 @@ template <int D>
 class BondStencil {
  public:
   BondStencil() = default;
-  /// bonds (i < j) with their law index; n particles.
+  /// bonds (i < j) with their law index; n particles. merge_offsets = false: one group per offset always (the
+  /// tests compare the two layouts).
   BondStencil(std::size_t n, const std::vector<int>& bi, const std::vector<int>& bj, const std::vector<int>& blaw,
-              bool single_precision = false) {
+              bool single_precision = false, bool merge_offsets = true) {
     n_ = n;
     single_ = single_precision;
     // per offset o = j - i (0 < o < n): flat arrays, not maps (the cutoff model builds a stencil per list)
     std::vector<std::size_t> count(n, 0);
     for (std::size_t b = 0; b < bi.size(); ++b) ++count[static_cast<std::size_t>(bj[b] - bi[b])];
-    std::vector<int> group_of(n, -1);
-    for (std::size_t uo = 1; uo < n; ++uo) {
-      const int o = static_cast<int>(uo);
+    // A sweep evaluates only the runs of consecutive i that have a bond, but the assembly visits every
+    // particle once per group. Measured (1 thread): an offset is worth a sweep when at least 5 % of its slots
+    // are bonds (the plate's 39: 22 %, 10 % faster as a sweep; the 3-D block's inter-plane offsets at 15-36 %:
+    // the bond pass 1.36 -> 0.94 ms once they were swept from rings that stay in L2).
+    std::vector<int> swept;
+    for (std::size_t uo = 1; uo < n && swept.size() < max_stencil_offsets; ++uo) {
       const std::size_t c = count[uo];
-      if (c == 0) continue;
-      // A sweep evaluates only the runs of consecutive i that have a bond, but the assembly visits every
-      // particle once per offset. Measured (1 thread): an offset is worth a sweep when at least 5 % of its
-      // slots are bonds (the plate's 39: 22 %, 10 % faster as a sweep; the 3-D block's inter-plane offsets at
-      // 15-36 %: the bond pass 1.36 -> 0.94 ms once they were swept from rings that stay in L2).
-      const double density = static_cast<double>(c) / static_cast<double>(n - uo);
-      if (c >= 8 && density >= 0.05 && groups_.size() < max_stencil_offsets) {
-        group_of[uo] = static_cast<int>(groups_.size());
-        Group g;
-        g.offset = o;
-        g.alive.assign(n - o, 0);
-        g.law.assign(n - o, 0);
-        groups_.push_back(std::move(g));
-        reach_ = std::max(reach_, static_cast<long>(o));
+      if (c >= 8 && static_cast<double>(c) >= 0.05 * static_cast<double>(n - uo)) swept.push_back(static_cast<int>(uo));
+    }
+    // Offsets whose bonds share no first and no second particle may share one buffer (a group): a lattice
+    // direction whose offset changes with the row's parity or the section's stacking is then swept into one
+    // ring, and the assembly reads it back at each offset only where a bond lands (the 3-D block: 13 offsets
+    // in 8 groups, the fewest its conflicts allow). Merged only where the rings stream through L2 (the test
+    // for a whole-body ring below): there it saves stores and zero fills (3-D block: one thread 1.24x / 1.11x
+    // on the two cores, two threads 1.02-1.05x). A body whose rings fit ran 0.90x / 0.91x merged (the plate,
+    // one / two threads: its 39 and 41 alternate every 40-41 particles). The most populous offsets go first.
+    std::size_t whole_body = particle_grain;
+    const long largest = swept.empty() ? 0 : swept.back();
+    while (whole_body < n + static_cast<std::size_t>((largest + 7) / 8 * 8)) whole_body *= 2;
+    const bool merge = merge_offsets && whole_body * swept.size() * D * sizeof(double) > (256u << 10);
+    if (merge)
+      std::stable_sort(swept.begin(), swept.end(), [&](int a, int b) {
+        return count[static_cast<std::size_t>(a)] > count[static_cast<std::size_t>(b)];
+      });
+    std::vector<int> term_of(n, -1);
+    for (std::size_t k = 0; k < swept.size(); ++k) term_of[static_cast<std::size_t>(swept[k])] = static_cast<int>(k);
+    std::vector<std::vector<int>> starts(swept.size());
+    for (std::size_t b = 0; b < bi.size(); ++b) {
+      const int k = term_of[static_cast<std::size_t>(bj[b] - bi[b])];
+      if (k >= 0) starts[static_cast<std::size_t>(k)].push_back(bi[b]);
+    }
+    std::vector<std::vector<std::uint8_t>> first_taken, second_taken;  // per group and particle
+    std::vector<int> group_of(n, -1);                                  // per offset
+    for (std::size_t k = 0; k < swept.size(); ++k) {
+      const int o = swept[k];
+      std::size_t gi = merge ? 0 : groups_.size();
+      for (; gi < groups_.size(); ++gi)
+        if (std::none_of(starts[k].begin(), starts[k].end(), [&](int i) {
+              return first_taken[gi][static_cast<std::size_t>(i)] || second_taken[gi][static_cast<std::size_t>(i + o)];
+            }))
+          break;
+      if (gi == groups_.size()) {
+        groups_.emplace_back();
+        groups_.back().alive.assign(n, 0);
+        groups_.back().law.assign(n, 0);
+        groups_.back().offset_at.assign(n, 0);
+        if (merge) first_taken.emplace_back(n, 0), second_taken.emplace_back(n, 0);
       }
+      if (merge)
+        for (const int i : starts[k])
+          first_taken[gi][static_cast<std::size_t>(i)] = second_taken[gi][static_cast<std::size_t>(i + o)] = 1;
+      groups_[gi].offsets.push_back(o);
+      groups_[gi].max_offset = std::max(groups_[gi].max_offset, static_cast<long>(o));
+      group_of[static_cast<std::size_t>(o)] = static_cast<int>(gi);
+      reach_ = std::max(reach_, static_cast<long>(o));
     }
     loc_.resize(bi.size());
     std::vector<int> si, sj, sl;
@@ -80,8 +120,10 @@ class BondStencil {
       const int gi = group_of[static_cast<std::size_t>(bj[b] - bi[b])];
       if (gi >= 0) {
         Group& g = groups_[static_cast<std::size_t>(gi)];
-        g.alive[static_cast<std::size_t>(bi[b])] = 1;
-        g.law[static_cast<std::size_t>(bi[b])] = blaw[b];
+        const std::size_t i = static_cast<std::size_t>(bi[b]);
+        g.alive[i] = 1;
+        g.law[i] = blaw[b];
+        g.offset_at[i] = bj[b] - bi[b];
         loc_[b] = {gi, bi[b]};
       } else {
         loc_[b] = {-1, static_cast<int>(si.size())};
@@ -91,18 +133,52 @@ class BondStencil {
     }
     sparse_i_ = std::move(si), sparse_j_ = std::move(sj), sparse_law_ = std::move(sl);
     for (Group& g : groups_) {
-      // Runs [begin, end) of i with a bond; gaps shorter than a vector are swept through (no bond there:
-      // the force is zero).
-      const long m = static_cast<long>(g.alive.size());
+      // Runs [begin, end) of i with a bond at one offset; gaps shorter than a vector are swept through (no
+      // bond there: the force is zero).
+      const long m = static_cast<long>(n);
       for (long i = 0; i < m; ++i) {
-        if (!g.alive[static_cast<std::size_t>(i)]) continue;
-        if (!g.runs.empty() && i - g.runs.back().second < 8)
-          g.runs.back().second = i + 1;
+        const std::size_t u = static_cast<std::size_t>(i);
+        if (!g.alive[u]) continue;
+        if (!g.runs.empty() && g.runs.back().offset == g.offset_at[u] && i - g.runs.back().end < 8)
+          g.runs.back().end = i + 1;
         else
-          g.runs.push_back({i, i + 1});
+          g.runs.push_back({i, i + 1, g.offset_at[u]});
       }
+      // where a group has several offsets: per offset, the particles i (eight to a byte) that a bond
+      // (i - o, i) of the group reaches
+      if (g.offsets.size() > 1)
+        for (const int o : g.offsets) {
+          std::vector<std::uint8_t> lanes((n + 7) / 8, 0);
+          for (std::size_t i = 0; i + static_cast<std::size_t>(o) < n; ++i)
+            if (g.alive[i] && g.offset_at[i] == o) {
+              const std::size_t j = i + static_cast<std::size_t>(o);
+              lanes[j / 8] = static_cast<std::uint8_t>(lanes[j / 8] | (1u << (j % 8)));
+            }
+          g.lanes.push_back(std::move(lanes));
+        }
+      if (g.offsets.size() > 1) {
+        // per eight particles: the one offset that reaches them (its index, and its lanes), or 0xff if several
+        g.codes.assign((n + 7) / 8, 0);
+        for (std::size_t v = 0; v < g.codes.size(); ++v) {
+          int term = -1;
+          for (std::size_t t = 0; t < g.lanes.size(); ++t)
+            if (g.lanes[t][v] != 0) term = term < 0 ? static_cast<int>(t) : 0xff;
+          if (term < 0) term = 0;
+          const unsigned mask = term == 0xff ? 0u : g.lanes[static_cast<std::size_t>(term)][v];
+          g.codes[v] = static_cast<std::uint16_t>((static_cast<unsigned>(term) << 8) | mask);
+        }
+      }
+      g.offset_at.clear();
+      g.offset_at.shrink_to_fit();
     }
-    for (const Group& g : groups_) offsets_.push_back(static_cast<std::size_t>(g.offset));
+    for (const Group& g : groups_) {
+      for (std::size_t k = 0; k < g.offsets.size(); ++k)
+        terms_.push_back({static_cast<std::size_t>(g.offsets[k]), g.lanes.empty() ? nullptr : g.lanes[k].data()});
+      group_terms_.push_back(g.offsets.size());
+      group_codes_.push_back(g.codes.empty() ? nullptr : g.codes.data());
+      offsets_.push_back(static_cast<std::size_t>(g.offsets.front()));
+      merged_ = merged_ || g.offsets.size() > 1;
+    }
     reach_ = (reach_ + 7) / 8 * 8;  // keeps each thread's buffers 64-byte aligned like its particles
     // a block's assembly reads back to F[b0 - reach]; the block being swept must not overwrite it
     ring_ = particle_grain;
@@ -119,6 +195,9 @@ class BondStencil {
   /// Whether add_forces sets f (f = 0 + the bond forces, for every particle) instead of adding to it: the
   /// move then need not zero f, nor the assembly read it (two of the plate's seven streams through L2).
   void assign_forces(bool assign) { assign_ = assign; }
+
+  /// Buffers the sweeps fill: one per offset, fewer where offsets were merged.
+  std::size_t groups() const { return groups_.size(); }
 
   void set_alive(std::size_t bond, bool alive) {
     const auto [g, k] = loc_[bond];
@@ -166,11 +245,19 @@ class BondStencil {
   }
 
  private:
+  struct Run {
+    long begin, end;  ///< [begin, end) of i
+    int offset;       ///< the bonds (i, i + offset)
+  };
   struct Group {
-    int offset = 0;
-    std::vector<std::uint8_t> alive;  ///< bond (i, i + offset) exists and is intact
+    std::vector<int> offsets;  ///< in the order the assembly subtracts them
+    long max_offset = 0;
+    std::vector<std::uint8_t> alive;  ///< per particle i: its bond in the group exists and is intact
     std::vector<int> law;
-    std::vector<std::pair<long, long>> runs;  ///< [begin, end) of i holding the bonds, ascending
+    std::vector<int> offset_at;  ///< per particle: its bond's offset (while the stencil is built)
+    std::vector<Run> runs;       ///< ascending
+    std::vector<std::vector<std::uint8_t>> lanes;  ///< per offset, if several (StencilTerm::lanes)
+    std::vector<std::uint16_t> codes;  ///< per eight particles, if several offsets: term << 8 | lanes, term 0xff: mixed
   };
   /// One thread's particles [pb, pe) and what it needs to sum their bond forces by itself.
   struct Work {
@@ -228,9 +315,9 @@ class BondStencil {
       for (auto& c : w.xs) c.assign(static_cast<std::size_t>(w.xhi - w.xlo), 0.0);
       w.sparse_alive.resize(w.sparse_id.size());
       for (const Group& g : groups_) {
-        const long from = std::max(0L, w.pb - g.offset);
+        const long from = std::max(0L, w.pb - g.max_offset);
         w.first_run.push_back(static_cast<std::size_t>(
-            std::lower_bound(g.runs.begin(), g.runs.end(), from, [](const auto& run, long i) { return run.second <= i; }) -
+            std::lower_bound(g.runs.begin(), g.runs.end(), from, [](const Run& run, long i) { return run.end <= i; }) -
             g.runs.begin()));
       }
       w.next_run.assign(w.first_run.begin(), w.first_run.end());
@@ -260,9 +347,9 @@ class BondStencil {
     // The bonds (i, i + o) with i < pb whose second particle is ours (none before particle 0: zeros).
     copy_to(w.pb + reach_);
     for (std::size_t g = 0; g < groups_.size(); ++g) {
-      zero(w, g, w.pb - groups_[g].offset, std::min(0L, w.pb));
+      zero(w, g, w.pb - groups_[g].max_offset, std::min(0L, w.pb));
       sweep_runs<Real>(w, g, law.with_ids(groups_[g].law.data()), cut2, inv_rmin, broke,
-                       std::max(0L, w.pb - groups_[g].offset), w.pb);
+                       std::max(0L, w.pb - groups_[g].max_offset), w.pb);
     }
     std::size_t next_touched = 0;
     for (long b0 = w.pb; b0 < w.pe; b0 += particle_grain) {
@@ -275,23 +362,23 @@ class BondStencil {
     return broke;
   }
 
-  // Evaluate one offset's bonds (i, i + o), i in [b, e), where its runs are; zeros between them (the ring's
+  // Evaluate one group's bonds (i, i + o(i)), i in [b, e), where its runs are; zeros between them (the ring's
   // slots hold other particles' forces from before). One block at a time: a block's slots do not wrap.
   template <class Real, class Law>
   void sweep_runs(Work& w, std::size_t gi, const Law& law, double cut2, double inv_rmin, long& broke, long b, long e) {
     // the thread sweeps each offset's bonds in ascending i: the runs before b are behind its cursor
     const auto& runs = groups_[gi].runs;
     auto r = runs.begin() + static_cast<std::ptrdiff_t>(w.next_run[gi]);
-    while (r != runs.end() && r->second <= b) ++r;
+    while (r != runs.end() && r->end <= b) ++r;
     for (long c0 = b; c0 < e;) {
       const long c1 = std::min(e, (c0 / particle_grain + 1) * particle_grain);
       long at = c0;
-      for (; r != runs.end() && r->first < c1; ++r) {
-        const long rb = std::max(at, r->first), re = std::min(c1, r->second);
+      for (; r != runs.end() && r->begin < c1; ++r) {
+        const long rb = std::max(at, r->begin), re = std::min(c1, r->end);
         zero(w, gi, at, rb);
-        sweep<Real>(w, gi, law, cut2, inv_rmin, broke, rb, re);
+        sweep<Real>(w, gi, law, cut2, inv_rmin, broke, rb, re, r->offset);
         at = re;
-        if (r->second > c1) break;  // the run goes on in the next block
+        if (r->end > c1) break;  // the run goes on in the next block
       }
       zero(w, gi, at, c1);
       w.next_run[gi] = static_cast<std::size_t>(r - runs.begin());
@@ -308,12 +395,13 @@ class BondStencil {
       for (int c = 0; c < D; ++c) std::fill_n(w.F_of(gi, c) + slot(b), e - b, 0.0);
   }
 
-  // Evaluate one offset's bonds (i, i + o), i in [b, e), into this thread's buffer.
+  // Evaluate the bonds (i, i + o), i in [b, e), of one group into this thread's buffer.
   template <class Real, class Law>
-  void sweep(Work& w, std::size_t gi, const Law law, double cut2, double inv_rmin, long& broke, long b, long e) {
+  void sweep(Work& w, std::size_t gi, const Law law, double cut2, double inv_rmin, long& broke, long b, long e,
+             int offset) {
     if (b >= e) return;
     const Group& g = groups_[gi];
-    const std::size_t o = static_cast<std::size_t>(g.offset);
+    const std::size_t o = static_cast<std::size_t>(offset);
     const std::size_t ub = static_cast<std::size_t>(b), m = static_cast<std::size_t>(e - b);
     // positions of particle b + k at x[k] (the thread's copy starts at xlo <= b)
     const double* __restrict x0 = w.xs[0].data() + (ub - static_cast<std::size_t>(w.xlo));
@@ -390,29 +478,39 @@ class BondStencil {
       for (int c = 0; c < D; ++c) extra[c][p - static_cast<std::size_t>(b0)] = sum[c];
     }
     double* __restrict fb = f + static_cast<std::size_t>(b0) * D;
+    const std::size_t lane0 = static_cast<std::size_t>(b0) / 8;  // b0 is a multiple of 8
 #ifdef PMFRAG_HAVE_AVX512_SWEEP
-    static_assert(block == 256, "assemble_block_avx512 takes blocks of 256");
-    if (assign_)
-      assemble_block_avx512<D, true>(w.F.data(), at, ring_ - 1, w.stride, offsets_.data(), groups_.size(),
-                                     any_extra ? extra : nullptr, fb, len);
-    else
-      assemble_block_avx512<D, false>(w.F.data(), at, ring_ - 1, w.stride, offsets_.data(), groups_.size(),
-                                      any_extra ? extra : nullptr, fb, len);
+    static_assert(block == 256, "the AVX-512 assemblies take blocks of at most 256");
+    const double(*ex)[256] = any_extra ? extra : nullptr;
+    if (merged_) {  // a branch per group and eight particles: the plate ran 0.84x when it went this way too
+      if (assign_)
+        assemble_block_grouped_avx512<D, true>(w.F.data(), at, ring_ - 1, w.stride, terms_.data(), group_terms_.data(),
+                                               group_codes_.data(), group_terms_.size(), lane0, ex, fb, len);
+      else
+        assemble_block_grouped_avx512<D, false>(w.F.data(), at, ring_ - 1, w.stride, terms_.data(), group_terms_.data(),
+                                                group_codes_.data(), group_terms_.size(), lane0, ex, fb, len);
+    } else if (assign_) {
+      assemble_block_avx512<D, true>(w.F.data(), at, ring_ - 1, w.stride, offsets_.data(), groups_.size(), ex, fb, len);
+    } else {
+      assemble_block_avx512<D, false>(w.F.data(), at, ring_ - 1, w.stride, offsets_.data(), groups_.size(), ex, fb, len);
+    }
 #else
     alignas(64) double acc[D][block];
     for (int c = 0; c < D; ++c)
       for (std::size_t k = 0; k < len; ++k) acc[c][k] = 0.0;
-    for (std::size_t g = 0; g < groups_.size(); ++g) {
-      const std::size_t o = offsets_[g];
-      const std::size_t back = slot(b0 - static_cast<long>(o));  // F[i - o], read on into the repeated block
-      for (int c = 0; c < D; ++c) {
-        const double* __restrict F = w.F_of(g, c) + at;
-        const double* __restrict Fback = w.F_of(g, c) + back;
-        double* __restrict a = acc[c];
-#pragma omp simd
-        for (std::size_t k = 0; k < len; ++k) a[k] += F[k] - Fback[k];
-      }
-    }
+    const StencilTerm* term = terms_.data();
+    for (std::size_t g = 0; g < group_terms_.size(); term += group_terms_[g], ++g)
+      for (int c = 0; c < D; ++c)
+        for (std::size_t k = 0; k < len; ++k) {
+          // the same order as the vector assembly: F[i], less F[i - o] at each offset that reaches i
+          double s = w.F_of(g, c)[at + k];
+          for (std::size_t t = 0; t < group_terms_[g]; ++t) {
+            const std::size_t i = static_cast<std::size_t>(b0) + k;
+            if (term[t].lanes == nullptr || ((term[t].lanes[i / 8] >> (i % 8)) & 1u))
+              s -= w.F_of(g, c)[slot(static_cast<long>(i) - static_cast<long>(term[t].offset))];
+          }
+          acc[c][k] += s;
+        }
     if (any_extra)
       for (int c = 0; c < D; ++c)
         for (std::size_t k = 0; k < len; ++k) acc[c][k] += extra[c][k];
@@ -431,7 +529,11 @@ class BondStencil {
   std::size_t ring_ = particle_grain;  ///< R: slots per offset and component of a thread's F
   bool wraps_ = true;                  ///< some slot of a ring holds more than one particle
   std::vector<Group> groups_;
-  std::vector<std::size_t> offsets_;  ///< each group's offset, contiguous for the vector assembly
+  std::vector<StencilTerm> terms_;          ///< every group's offsets in turn, for the assembly
+  std::vector<std::size_t> group_terms_;    ///< how many of terms_ each group has
+  std::vector<const std::uint16_t*> group_codes_;  ///< Group::codes, or nullptr
+  std::vector<std::size_t> offsets_;  ///< each group's first offset (its only one unless merged_)
+  bool merged_ = false;               ///< some group has several offsets
   std::vector<int> sparse_i_, sparse_j_, sparse_law_;  ///< off-stencil bonds
   std::vector<std::uint8_t> sparse_alive_;
   std::vector<std::pair<int, int>> loc_;  ///< bond -> (group or -1 for off-stencil, index)

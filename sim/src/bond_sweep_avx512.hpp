@@ -11,11 +11,19 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 
 namespace pmfrag::detail {
 /// At most this many index offsets are swept (the block assembly keeps one back-offset per offset on its
 /// stack); further offsets go through the pair table. The paper's bodies have 4 (plate) and 13 (3-D block).
 inline constexpr std::size_t max_stencil_offsets = 64;
+
+/// One offset of a group in the assembly: particle i receives -F[i - offset] where `lanes` has bit i % 8 of
+/// byte i / 8 set (nullptr: every particle; the group's buffer then holds zeros where no bond is).
+struct StencilTerm {
+  std::size_t offset;
+  const std::uint8_t* lanes;
+};
 }  // namespace pmfrag::detail
 
 #if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__)
@@ -102,6 +110,36 @@ inline long sweep_fixed_avx512(const double* __restrict x0, const double* __rest
   return broke;
 }
 
+/// f (N x D, interleaved) from particle k: f = 0 + a (Assign) or f + a, for the first min(left, 8) particles of
+/// the block sums a (by component); the same bits as adding particle by particle.
+template <int D, bool Assign>
+inline void store_block_sums(const __m512d (&a)[D], double* fk, std::size_t left) {
+  if constexpr (D == 2) {  // interleave (a0, a1) into x, y pairs: particles k..k+3 and k+4..k+7
+    const __m512i lo = _mm512_set_epi64(11, 3, 10, 2, 9, 1, 8, 0), hi = _mm512_set_epi64(15, 7, 14, 6, 13, 5, 12, 4);
+    const __mmask8 mlo = left >= 4 ? __mmask8(0xff) : __mmask8((1u << (2 * left)) - 1u);
+    const __mmask8 mhi = left >= 8 ? __mmask8(0xff) : left > 4 ? __mmask8((1u << (2 * (left - 4))) - 1u) : __mmask8(0);
+    const __m512d f0 = Assign ? _mm512_setzero_pd() : _mm512_maskz_loadu_pd(mlo, fk);
+    const __m512d f1 = Assign ? _mm512_setzero_pd() : _mm512_maskz_loadu_pd(mhi, fk + 8);
+    _mm512_mask_storeu_pd(fk, mlo, _mm512_add_pd(f0, _mm512_permutex2var_pd(a[0], lo, a[1])));
+    _mm512_mask_storeu_pd(fk + 8, mhi, _mm512_add_pd(f1, _mm512_permutex2var_pd(a[0], hi, a[1])));
+  } else {  // interleave (a0, a1, a2) into x, y, z triples: three vectors of eight, each from two permutes
+    alignas(64) static constexpr long long xy[3][8] = {
+        {0, 8, 0, 1, 9, 0, 2, 10}, {0, 3, 11, 0, 4, 12, 0, 5}, {13, 0, 6, 14, 0, 7, 15, 0}};
+    alignas(64) static constexpr long long with_z[3][8] = {
+        {0, 1, 8, 3, 4, 9, 6, 7}, {10, 1, 2, 11, 4, 5, 12, 7}, {0, 13, 2, 3, 14, 5, 6, 15}};
+    const std::size_t values = 3 * (left < 8 ? left : 8);
+    for (std::size_t v = 0; v < 3; ++v) {
+      const __mmask8 m = values >= 8 * (v + 1) ? __mmask8(0xff)
+                         : values > 8 * v    ? __mmask8((1u << (values - 8 * v)) - 1u)
+                                             : __mmask8(0);
+      const __m512d t = _mm512_permutex2var_pd(a[0], _mm512_load_si512(xy[v]), a[1]);
+      const __m512d out = _mm512_permutex2var_pd(t, _mm512_load_si512(with_z[v]), a[2]);
+      const __m512d old = Assign ? _mm512_setzero_pd() : _mm512_maskz_loadu_pd(m, fk + 8 * v);
+      _mm512_mask_storeu_pd(fk + 8 * v, m, _mm512_add_pd(old, out));
+    }
+  }
+}
+
 /// The assembly of one block of len particles: f_i += sum over the offsets o_g of F_g[i] - F_g[i - o_g], then
 /// + extra[i] if given, f (N x D, interleaved) from the block's first particle. Assign: f_i = 0 + the sum
 /// instead (the same bits as adding to a zeroed f, without reading f). F_g's component c is the ring
@@ -128,24 +166,68 @@ inline void assemble_block_avx512(const double* rows, std::size_t at, std::size_
       }
     if (extra)
       for (int c = 0; c < D; ++c) a[c] = _mm512_add_pd(a[c], _mm512_maskz_loadu_pd(lanes, extra[c] + k));
-    double* fk = f + k * D;
-    if constexpr (D == 2) {  // interleave (a0, a1) into x, y pairs: particles k..k+3 and k+4..k+7
-      const __m512i lo = _mm512_set_epi64(11, 3, 10, 2, 9, 1, 8, 0), hi = _mm512_set_epi64(15, 7, 14, 6, 13, 5, 12, 4);
-      const __mmask8 mlo = left >= 4 ? __mmask8(0xff) : __mmask8((1u << (2 * left)) - 1u);
-      const __mmask8 mhi = left >= 8 ? __mmask8(0xff) : left > 4 ? __mmask8((1u << (2 * (left - 4))) - 1u) : __mmask8(0);
-      const __m512d f0 = Assign ? _mm512_setzero_pd() : _mm512_maskz_loadu_pd(mlo, fk);
-      const __m512d f1 = Assign ? _mm512_setzero_pd() : _mm512_maskz_loadu_pd(mhi, fk + 8);
-      _mm512_mask_storeu_pd(fk, mlo, _mm512_add_pd(f0, _mm512_permutex2var_pd(a[0], lo, a[1])));
-      _mm512_mask_storeu_pd(fk + 8, mhi, _mm512_add_pd(f1, _mm512_permutex2var_pd(a[0], hi, a[1])));
-    } else {
-      alignas(64) double t[D][8];
-      for (int c = 0; c < D; ++c) _mm512_store_pd(t[c], a[c]);
-      for (std::size_t q = 0; q < (left < 8 ? left : 8); ++q)
+    store_block_sums<D, Assign>(a, f + k * D, left);
+  }
+}
+
+/// assemble_block_avx512 for groups of several offsets: f_i += sum over the groups g of F_g[i] - F_g[i - o] for each
+/// of g's offsets o that reaches i (StencilTerm), then + extra[i] if given, f (N x D, interleaved) from the
+/// block's first particle, lane0 = its index / 8. Assign: f_i = 0 + the sum instead (the same bits as adding to a
+/// zeroed f, without reading f). F_g's component c is the ring at rows + (g D + c) stride: particle i at slot
+/// i & mask, the block's first at slot `at`; a ring's slots from mask + 1 on repeat its first block, so
+/// F_g[i - o] is read on without wrapping. Eight particles at a time with the sums in registers: through
+/// memory, the running sums were read back right after being stored, and the loop ran at a quarter of its speed.
+template <int D, bool Assign>
+inline void assemble_block_grouped_avx512(const double* rows, std::size_t at, std::size_t mask, std::size_t stride,
+                                  const StencilTerm* terms, const std::size_t* group_terms,
+                                  const std::uint16_t* const* group_codes, std::size_t groups,
+                                  std::size_t lane0, const double (*extra)[256], double* f, std::size_t len) {
+  std::ptrdiff_t back[max_stencil_offsets];  // from F_g[i] to F_g[i - o], term by term
+  std::size_t nterms = 0;
+  for (std::size_t g = 0; g < groups; ++g) nterms += group_terms[g];
+  for (std::size_t t = 0; t < nterms; ++t)
+    back[t] = static_cast<std::ptrdiff_t>((at + mask + 1 - terms[t].offset) & mask) - static_cast<std::ptrdiff_t>(at);
+  for (std::size_t k = 0; k < len; k += 8) {
+    const std::size_t left = len - k;
+    const __mmask8 lanes = first_lanes(left);
+    __m512d a[D];
+    for (int c = 0; c < D; ++c) a[c] = _mm512_setzero_pd();
+    std::size_t t0 = 0;
+    for (std::size_t g = 0; g < groups; t0 += group_terms[g], ++g) {
+      const double* Fg = rows + g * D * stride + at + k;
+      if (group_terms[g] == 1) {  // one offset: the buffer holds zeros where no bond is
+        const std::ptrdiff_t b = back[t0];
         for (int c = 0; c < D; ++c) {
-          double& out = fk[q * D + static_cast<std::size_t>(c)];
-          out = (Assign ? 0.0 : out) + t[c][q];
+          const double* F = Fg + static_cast<std::size_t>(c) * stride;
+          a[c] = _mm512_add_pd(a[c], _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, F), _mm512_maskz_loadu_pd(lanes, F + b)));
         }
+        continue;
+      }
+      // Several offsets: each particle receives from at most one of them (their bonds share no second
+      // particle), so F[i - o] is gathered by merging masked loads, and subtracted once.
+      const unsigned code = group_codes[g][lane0 + k / 8];
+      if ((code >> 8) != 0xff) {  // one offset reaches these eight (most of them: a row is 40-41 long)
+        const std::ptrdiff_t b = back[t0 + (code >> 8)];
+        const __mmask8 m = __mmask8(code & lanes);
+        for (int c = 0; c < D; ++c) {
+          const double* F = Fg + static_cast<std::size_t>(c) * stride;
+          a[c] = _mm512_add_pd(a[c], _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, F), _mm512_maskz_loadu_pd(m, F + b)));
+        }
+        continue;
+      }
+      __mmask8 reach[max_stencil_offsets];
+      const std::size_t nt = group_terms[g];
+      for (std::size_t t = 0; t < nt; ++t) reach[t] = __mmask8(terms[t0 + t].lanes[lane0 + k / 8] & lanes);
+      for (int c = 0; c < D; ++c) {
+        const double* F = Fg + static_cast<std::size_t>(c) * stride;
+        __m512d v = _mm512_maskz_loadu_pd(reach[0], F + back[t0]);
+        for (std::size_t t = 1; t < nt; ++t) v = _mm512_mask_loadu_pd(v, reach[t], F + back[t0 + t]);
+        a[c] = _mm512_add_pd(a[c], _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, F), v));
+      }
     }
+    if (extra)
+      for (int c = 0; c < D; ++c) a[c] = _mm512_add_pd(a[c], _mm512_maskz_loadu_pd(lanes, extra[c] + k));
+    store_block_sums<D, Assign>(a, f + k * D, left);
   }
 }
 

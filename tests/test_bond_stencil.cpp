@@ -1,0 +1,83 @@
+// The bond stencil's groups (sim/src/bond_stencil.hpp): in a large body, index offsets whose bonds share no
+// particle are swept into one buffer, and the assembly reads it back under lane masks. Checked here against
+// the same stencil with one group per offset and against a plain sum over the intact bonds, with bonds broken
+// in every group, on one and two threads.
+#include "bond_stencil.hpp"
+#include "pmfrag/scene.hpp"
+#include "pmfrag/system.hpp"
+#include "test_helpers.hpp"
+
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <vector>
+
+using namespace pmfrag;
+
+TEST(BondStencil, MergedOffsetsGiveTheForcesOfOneGroupPerOffset) {
+  // The paper's 3-D block without its slit (its 13 offsets; rings far larger than L2, so they merge), every
+  // particle moved at random by up to 2 % of r0 so that each bond carries a real force.
+  const Scene sc = read_scene(test::case_path("block3d_slit.toml"), {"body.0.slits=[]"});
+  System sys = build_system(sc);
+  const std::size_t n = sys.size();
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> jitter(-0.02 * sys.r0, 0.02 * sys.r0);
+  std::vector<double> x(3 * n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int d = 0; d < 3; ++d) x[3 * i + static_cast<std::size_t>(d)] = sys.position[i][d] + jitter(rng);
+  std::vector<int> bi, bj, blaw;
+  for (const auto& b : sys.bonds) bi.push_back(b[0]), bj.push_back(b[1]), blaw.push_back(0);
+  detail::BondStencil<3> merged(n, bi, bj, blaw), separate(n, bi, bj, blaw, false, false);
+  EXPECT_EQ(separate.groups(), 13u) << "the block's offsets: 1, 40-42, 778-780, 819-821, 860-862";
+  EXPECT_EQ(merged.groups(), 8u) << "the fewest groups the block's conflicting offsets allow";
+  // a fifth of the bonds broken, at random: each group loses bonds at each of its offsets
+  std::bernoulli_distribution broken(0.2);
+  std::vector<bool> alive(bi.size(), true);
+  for (std::size_t b = 0; b < bi.size(); ++b)
+    if (broken(rng)) {
+      alive[b] = false;
+      merged.set_alive(b, false);
+      separate.set_alive(b, false);
+    }
+  const PairLaw& law = sys.laws[0];
+  ASSERT_EQ(law.p, 7);
+  ASSERT_EQ(law.q, 14);
+  const detail::FixedLaw<7, 14> fixed{law.G, law.H};
+  const double cut2 = sys.cutoff * sys.cutoff, inv_rmin = INFINITY;
+  std::vector<double> plain(3 * n, 0.0);
+  double scale = 0.0;
+  for (std::size_t b = 0; b < bi.size(); ++b) {
+    if (!alive[b]) continue;
+    const std::size_t i = static_cast<std::size_t>(bi[b]), j = static_cast<std::size_t>(bj[b]);
+    double d[3], r2 = 0.0;
+    for (int c = 0; c < 3; ++c) d[c] = x[3 * i + static_cast<std::size_t>(c)] - x[3 * j + static_cast<std::size_t>(c)], r2 += d[c] * d[c];
+    const double r = std::sqrt(r2), fr = law.force(r) / r;
+    for (int c = 0; c < 3; ++c) {
+      plain[3 * i + static_cast<std::size_t>(c)] += fr * d[c];
+      plain[3 * j + static_cast<std::size_t>(c)] -= fr * d[c];
+    }
+  }
+  for (double v : plain) scale = std::max(scale, std::abs(v));
+  ASSERT_GT(scale, 1e3) << "dyn: the jitter should load the bonds";
+  std::vector<double> first;
+  for (int threads : {1, 2}) {
+    omp_set_num_threads(threads);
+    std::vector<double> fm(3 * n, 0.0), fs(3 * n, 0.0);
+    EXPECT_EQ(merged.add_forces(x.data(), fm.data(), fixed, cut2, inv_rmin), 0);
+    EXPECT_EQ(separate.add_forces(x.data(), fs.data(), fixed, cut2, inv_rmin), 0);
+    double vs_separate = 0.0, vs_plain = 0.0;
+    for (std::size_t k = 0; k < 3 * n; ++k)
+      vs_separate = std::max(vs_separate, std::abs(fm[k] - fs[k])), vs_plain = std::max(vs_plain, std::abs(fm[k] - plain[k]));
+    // the two layouts add the same bond forces in another order
+    EXPECT_LT(vs_separate, 1e-13 * scale) << threads << " thread(s)";
+    EXPECT_LT(vs_plain, 1e-9 * scale) << threads << " thread(s)";
+    if (first.empty())
+      first = fm;
+    else
+      EXPECT_EQ(std::memcmp(first.data(), fm.data(), fm.size() * sizeof(double)), 0) << "1 and 2 threads";
+  }
+  omp_set_num_threads(omp_get_num_procs());
+}
