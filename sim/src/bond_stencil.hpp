@@ -82,12 +82,14 @@ class BondStencil {
       std::stable_sort(swept.begin(), swept.end(), [&](int a, int b) {
         return count[static_cast<std::size_t>(a)] > count[static_cast<std::size_t>(b)];
       });
-    std::vector<int> term_of(n, -1);
-    for (std::size_t k = 0; k < swept.size(); ++k) term_of[static_cast<std::size_t>(swept[k])] = static_cast<int>(k);
-    std::vector<std::vector<int>> starts(swept.size());
-    for (std::size_t b = 0; b < bi.size(); ++b) {
-      const int k = term_of[static_cast<std::size_t>(bj[b] - bi[b])];
-      if (k >= 0) starts[static_cast<std::size_t>(k)].push_back(bi[b]);
+    std::vector<std::vector<int>> starts(swept.size());  // merging: the first particles of each offset's bonds
+    if (merge) {
+      std::vector<int> term_of(n, -1);
+      for (std::size_t k = 0; k < swept.size(); ++k) term_of[static_cast<std::size_t>(swept[k])] = static_cast<int>(k);
+      for (std::size_t b = 0; b < bi.size(); ++b) {
+        const int k = term_of[static_cast<std::size_t>(bj[b] - bi[b])];
+        if (k >= 0) starts[static_cast<std::size_t>(k)].push_back(bi[b]);
+      }
     }
     std::vector<std::vector<std::uint8_t>> first_taken, second_taken;  // per group and particle
     std::vector<int> group_of(n, -1);                                  // per offset
@@ -103,7 +105,6 @@ class BondStencil {
         groups_.emplace_back();
         groups_.back().alive.assign(n, 0);
         groups_.back().law.assign(n, 0);
-        groups_.back().offset_at.assign(n, 0);
         if (merge) first_taken.emplace_back(n, 0), second_taken.emplace_back(n, 0);
       }
       if (merge)
@@ -115,6 +116,7 @@ class BondStencil {
       reach_ = std::max(reach_, static_cast<long>(o));
     }
     loc_.resize(bi.size());
+    std::vector<std::vector<int>> offset_at(groups_.size(), std::vector<int>(n, 0));  // per group: each bond's offset
     std::vector<int> si, sj, sl;
     for (std::size_t b = 0; b < bi.size(); ++b) {
       const int gi = group_of[static_cast<std::size_t>(bj[b] - bi[b])];
@@ -123,7 +125,7 @@ class BondStencil {
         const std::size_t i = static_cast<std::size_t>(bi[b]);
         g.alive[i] = 1;
         g.law[i] = blaw[b];
-        g.offset_at[i] = bj[b] - bi[b];
+        offset_at[static_cast<std::size_t>(gi)][i] = bj[b] - bi[b];
         loc_[b] = {gi, bi[b]};
       } else {
         loc_[b] = {-1, static_cast<int>(si.size())};
@@ -132,31 +134,31 @@ class BondStencil {
       }
     }
     sparse_i_ = std::move(si), sparse_j_ = std::move(sj), sparse_law_ = std::move(sl);
-    for (Group& g : groups_) {
+    for (std::size_t gi = 0; gi < groups_.size(); ++gi) {
+      Group& g = groups_[gi];
+      const std::vector<int>& at = offset_at[gi];
       // Runs [begin, end) of i with a bond at one offset; gaps shorter than a vector are swept through (no
       // bond there: the force is zero).
       const long m = static_cast<long>(n);
       for (long i = 0; i < m; ++i) {
         const std::size_t u = static_cast<std::size_t>(i);
         if (!g.alive[u]) continue;
-        if (!g.runs.empty() && g.runs.back().offset == g.offset_at[u] && i - g.runs.back().end < 8)
+        if (!g.runs.empty() && g.runs.back().offset == at[u] && i - g.runs.back().end < 8)
           g.runs.back().end = i + 1;
         else
-          g.runs.push_back({i, i + 1, g.offset_at[u]});
+          g.runs.push_back({i, i + 1, at[u]});
       }
-      // where a group has several offsets: per offset, the particles i (eight to a byte) that a bond
-      // (i - o, i) of the group reaches
-      if (g.offsets.size() > 1)
+      if (g.offsets.size() > 1) {
+        // per offset, the particles i (eight to a byte) that a bond (i - o, i) of the group reaches
         for (const int o : g.offsets) {
           std::vector<std::uint8_t> lanes((n + 7) / 8, 0);
           for (std::size_t i = 0; i + static_cast<std::size_t>(o) < n; ++i)
-            if (g.alive[i] && g.offset_at[i] == o) {
+            if (g.alive[i] && at[i] == o) {
               const std::size_t j = i + static_cast<std::size_t>(o);
               lanes[j / 8] = static_cast<std::uint8_t>(lanes[j / 8] | (1u << (j % 8)));
             }
           g.lanes.push_back(std::move(lanes));
         }
-      if (g.offsets.size() > 1) {
         // per eight particles: the one offset that reaches them (its index, and its lanes), or 0xff if several
         g.codes.assign((n + 7) / 8, 0);
         for (std::size_t v = 0; v < g.codes.size(); ++v) {
@@ -168,8 +170,6 @@ class BondStencil {
           g.codes[v] = static_cast<std::uint16_t>((static_cast<unsigned>(term) << 8) | mask);
         }
       }
-      g.offset_at.clear();
-      g.offset_at.shrink_to_fit();
     }
     for (const Group& g : groups_) {
       for (std::size_t k = 0; k < g.offsets.size(); ++k)
@@ -254,7 +254,6 @@ class BondStencil {
     long max_offset = 0;
     std::vector<std::uint8_t> alive;  ///< per particle i: its bond in the group exists and is intact
     std::vector<int> law;
-    std::vector<int> offset_at;  ///< per particle: its bond's offset (while the stencil is built)
     std::vector<Run> runs;       ///< ascending
     std::vector<std::vector<std::uint8_t>> lanes;  ///< per offset, if several (StencilTerm::lanes)
     std::vector<std::uint16_t> codes;  ///< per eight particles, if several offsets: term << 8 | lanes, term 0xff: mixed

@@ -204,7 +204,8 @@ inline void assemble_block_grouped_avx512(const double* rows, std::size_t at, st
         continue;
       }
       // Several offsets: each particle receives from at most one of them (their bonds share no second
-      // particle), so F[i - o] is gathered by merging masked loads, and subtracted once.
+      // particle), so F[i - o] is read at that one offset, or gathered by merging masked loads where the
+      // eight particles take it from several; either way it is subtracted once.
       const unsigned code = group_codes[g][lane0 + k / 8];
       if ((code >> 8) != 0xff) {  // one offset reaches these eight (most of them: a row is 40-41 long)
         const std::ptrdiff_t b = back[t0 + (code >> 8)];
