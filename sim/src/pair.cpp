@@ -61,7 +61,7 @@ class PairEffect final : public Effect<D> {
   std::string name() const override { return spec_.model == PairModel::bonded ? "pair (bonded)" : "pair (cutoff)"; }
   unsigned stages() const override {
     return stage::setup | stage::force | stage::observe | stage::step_limit | (uses_list_ ? stage::after_move : 0u) |
-           (spec_.model == PairModel::bonded ? stage::fused_force | stage::assigns_forces | stage::resident : 0u);
+           (spec_.model == PairModel::bonded ? stage::fused_force | stage::assigns_forces : 0u) | stage::resident;
   }
 
   void setup(State<D>& s) override {
@@ -105,14 +105,19 @@ class PairEffect final : public Effect<D> {
     }
   }
 
-  // Resident steps (effects.hpp): the bonded model's bonds and contacts, each thread on its particles. A
-  // thread evaluates every contact its particles are in (a pair across two threads' shares twice, with the
-  // same arithmetic, so the same bits) into its own copy of the pair forces, and sums its particles' from it.
+  // Resident steps (effects.hpp), each thread on its particles. Bonded: the bonds and contacts. A thread
+  // evaluates every contact its particles are in (a pair across two threads' shares twice, with the same
+  // arithmetic, so the same bits) into its own copy of the pair forces, and sums its particles' from it.
+  // Cutoff: the Verlet list's stencil, as add_forces evaluates it; a due list ends the block, and the plain
+  // step that follows decides whether to rebuild (after_move).
   bool resident_begin(State<D>&, const std::vector<long>& bounds) override {
-    if (spec_.model != PairModel::bonded) return false;
-    stencil_.prepare(bounds);
     const std::size_t threads = bounds.size() - 1;
     moved_of_.assign(threads * 8, moved_bound_);  // a cache line per thread
+    if (spec_.model == PairModel::cutoff) {
+      list_stencil_.prepare(bounds);
+      return true;
+    }
+    stencil_.prepare(bounds);
     const std::vector<int>& touched = list_.touched;
     touched_from_.clear();
     for (long b : bounds)
@@ -137,6 +142,10 @@ class PairEffect final : public Effect<D> {
   long resident_forces(State<D>& s, const double* x, int tid) override {
     const double cut2 = cutoff_ * cutoff_;
     return detail::with_law(laws_, nphase_ == 1, [&](const auto& law) {
+      if (spec_.model == PairModel::cutoff) {  // a pair beyond D adds zero: nothing to settle
+        list_stencil_.add_forces_of(tid, x, s.f.front().data(), law, cut2, inv_rmin_);
+        return 0L;
+      }
       const long mine = stencil_.add_forces_of(tid, x, s.f.front().data(), law, cut2, inv_rmin_);
       if (mine > 0) broke_of_team_.fetch_add(mine, std::memory_order_relaxed);
       ThreadContacts& c = contacts_of_[static_cast<std::size_t>(tid)];
