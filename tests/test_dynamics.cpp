@@ -491,6 +491,41 @@ TEST(Dynamics, MeasuredThreadCountLeavesTheTrajectoryBitwiseUnchanged) {
   omp_set_num_threads(omp_get_num_procs());
 }
 
+namespace {
+// An effect that declares stages and does nothing: where it stands decides whether the pair effect may
+// assign the forces.
+class Declares final : public Effect<2> {
+ public:
+  explicit Declares(unsigned stages) : stages_(stages) {}
+  std::string name() const override { return "declares"; }
+  unsigned stages() const override { return stages_; }
+
+ private:
+  unsigned stages_;
+};
+}  // namespace
+
+TEST(Dynamics, OnlyTheForcesThatComeFirstInAStepMayAssignThem) {
+  // stage::assigns_forces lets an effect set f instead of adding to it, so the move does not zero f. The
+  // cutoff reading's pair forces do so: right only while no force is computed before them in a step.
+  const Scene sc = read_scene(test::case_path("slit_plate_7_14.toml"), {"pair.model=\"cutoff\""});
+  const System sys = build_system(sc);
+  const double dt = choose_step(sc, sys).dt;
+  const auto with = [&](std::unique_ptr<Effect<2>> before, std::unique_ptr<Effect<2>> after) {
+    std::vector<std::unique_ptr<Effect<2>>> effects = make_effects<2>(sys, sc);
+    ASSERT_TRUE(effects.front()->stages() & stage::assigns_forces);
+    if (before) effects.insert(effects.begin(), std::move(before));
+    if (after) effects.push_back(std::move(after));
+    Leapfrog<2> lf(sys, std::move(effects), dt);
+  };
+  EXPECT_NO_THROW(with(nullptr, nullptr));
+  EXPECT_NO_THROW(with(nullptr, std::make_unique<Declares>(stage::force)));  // adds to them later
+  EXPECT_THROW(with(std::make_unique<Declares>(stage::force), nullptr), std::logic_error);
+  // fused forces are computed before the other forces, wherever the effect stands
+  EXPECT_THROW(with(nullptr, std::make_unique<Declares>(stage::fused_force)), std::logic_error);
+  EXPECT_THROW(with(std::make_unique<Declares>(stage::fused_force), nullptr), std::logic_error);
+}
+
 TEST(Dynamics, GuardRefusesAStepAboveTheLimit) {
   Scene sc = read_scene(test::case_path("slit_plate_7_14.toml"), {"time.dt=1e-6", "time.end=1e-3"});
   RunOptions ro;

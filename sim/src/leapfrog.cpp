@@ -72,10 +72,12 @@ Leapfrog<D>::Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>>
   }
   for (auto& e : effects_) {
     const unsigned st = e->stages();
-    if (st & stage::assigns_forces) {
-      if (!(st & stage::fused_force) || !fused_force_.empty())
-        throw std::logic_error(e->name() + ": only the first fused-force effect can assign the forces");
+    if (st & stage::assigns_forces) {  // fused forces are computed before the others (plain_step)
+      const bool first = fused_force_.empty() && ((st & stage::fused_force) || force_.empty());
+      if (!first) throw std::logic_error(e->name() + ": only the effect whose forces come first can assign them");
       assigned_ = true;
+    } else if ((st & stage::fused_force) && assigned_ && fused_force_.empty()) {
+      throw std::logic_error(e->name() + ": its fused forces would come before those assigning the forces");
     }
     if (st & stage::fused_force) fused_force_.push_back(e.get());
     if (st & stage::force) force_.push_back(e.get());

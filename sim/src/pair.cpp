@@ -61,7 +61,7 @@ class PairEffect final : public Effect<D> {
   std::string name() const override { return spec_.model == PairModel::bonded ? "pair (bonded)" : "pair (cutoff)"; }
   unsigned stages() const override {
     return stage::setup | stage::force | stage::observe | stage::step_limit | (uses_list_ ? stage::after_move : 0u) |
-           (spec_.model == PairModel::bonded ? stage::fused_force | stage::assigns_forces : 0u) | stage::resident;
+           (spec_.model == PairModel::bonded ? stage::fused_force : 0u) | stage::assigns_forces | stage::resident;
   }
 
   void setup(State<D>& s) override {
@@ -95,6 +95,8 @@ class PairEffect final : public Effect<D> {
   void add_forces(State<D>& s) override {
     const double cut2 = cutoff_ * cutoff_;
     settle_breaks(s, std::exchange(broke_, 0));
+    // cutoff: these forces come first and set f (stage::assigns_forces), so with no pair f is zero
+    if (spec_.model == PairModel::cutoff && list_.size() == 0) std::fill(s.f.begin(), s.f.end(), V::Zero());
     if (uses_list_ && list_.size() > 0) {
       detail::with_law(laws_, nphase_ == 1, [&](const auto& law) {
         if (spec_.model == PairModel::cutoff)  // the Verlet list of a lattice is a stencil too
@@ -114,6 +116,7 @@ class PairEffect final : public Effect<D> {
     const std::size_t threads = bounds.size() - 1;
     moved_of_.assign(threads * 8, moved_bound_);  // a cache line per thread
     if (spec_.model == PairModel::cutoff) {
+      if (list_.size() == 0) return false;  // (the plain step zeroes f)
       list_stencil_.prepare(bounds);
       return true;
     }
@@ -428,7 +431,10 @@ class PairEffect final : public Effect<D> {
       for (auto it = b0; it != b1; ++it) list_.add(static_cast<int>(a), *it, law_of(static_cast<int>(a), *it));
     }
     list_.index(n_);
-    if (spec_.model == PairModel::cutoff) list_stencil_ = detail::BondStencil<D>(n_, list_.i, list_.j, list_.law, spec_.single_precision);
+    if (spec_.model == PairModel::cutoff) {
+      list_stencil_ = detail::BondStencil<D>(n_, list_.i, list_.j, list_.law, spec_.single_precision);
+      list_stencil_.assign_forces(true);  // stage::assigns_forces: the pairs' sum is every particle's first term
+    }
     moved_bound_ = 0.0;
     built_step_ = s.step;
     x_build_.assign(s.x.front().data(), s.x.front().data() + s.size() * D);

@@ -54,8 +54,9 @@ inline constexpr unsigned fused_force = 1u << 5;
 /// (Leapfrog::advance), through the resident_* calls; an attached effect without it keeps every step on the
 /// plain path (one team pass per step, the serial stages between)
 inline constexpr unsigned resident = 1u << 6;
-/// with fused_force, for the first such effect: its fused forces set every particle's force (f = 0 + its
-/// forces) instead of adding to it, so the move need not zero f first (one stream through memory fewer)
+/// for the effect whose forces come first in a step (the first fused-force effect, or the first force effect
+/// if no effect has fused forces): its forces set every particle's force (f = 0 + its forces) instead of
+/// adding to it, so the move need not zero f first (one stream through memory fewer)
 inline constexpr unsigned assigns_forces = 1u << 7;
 }  // namespace stage
 

@@ -93,7 +93,7 @@ class Leapfrog {
                                ///< count (and, in resident steps, the events its last forces found)
   std::vector<Effect<D>*> resident_;
   bool resident_ok_ = true;     ///< every effect acting in a step has resident steps
-  bool assigned_ = false;       ///< the first fused force sets f (stage::assigns_forces): the move keeps it
+  bool assigned_ = false;       ///< the step's first forces set f (stage::assigns_forces): the move keeps it
   bool uniform_ = true;  ///< every step so far had the same dt: time = step x dt exactly
   std::unique_ptr<detail::ThreadTuner> tuner_;  ///< how many threads each step runs on
   std::unique_ptr<detail::LoadBalancer> balancer_;  ///< each thread's share of the particles
