@@ -284,27 +284,33 @@ TEST(Dynamics, CutoffListKeepsEveryPairWithinDAsTheLatticeCollapses) {
   // the last build could have used up the skin), against F(r)/r d summed over every pair closer than D.
   const Scene sc = read_scene(test::case_path("slit_plate_3_5.toml"), {"pair.model=\"cutoff\""});
   const System sys = build_system(sc);
+  // Checked every 500 steps through the collapse: a pair missed stays missed until the next rebuild.
   auto lf = test::make_leapfrog<2>(sys, sc, sc.time.dt);
-  for (long k = 0; k < 38000; ++k) lf.step();
-  const auto& x = lf.state().x;
-  const std::size_t n = x.size();
-  std::vector<Eigen::Vector2d> f(n, Eigen::Vector2d::Zero());
   long pairs = 0;
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t j = i + 1; j < n; ++j) {
-      const Eigen::Vector2d d = x[i] - x[j];
-      const double r = d.norm();
-      if (r > sys.cutoff) continue;
-      ++pairs;
-      f[i] += sys.laws[0].force(r) / r * d;
-      f[j] -= sys.laws[0].force(r) / r * d;
-    }
-  double worst = 0.0, scale = 0.0;
-  for (std::size_t i = 0; i < n; ++i)
-    worst = std::max(worst, (lf.state().f[i] - f[i]).norm()), scale = std::max(scale, f[i].norm());
-  std::printf("pairs within D at %.2e s: %ld (bonds at the start: %zu)\n", lf.state().time(), pairs, sys.bonds.size());
+  for (long k = 0; k < 38000; ++k) {
+    lf.step();
+    if (lf.state().step < 33000 || lf.state().step % 500 != 0) continue;
+    const auto& x = lf.state().x;
+    const std::size_t n = x.size();
+    std::vector<Eigen::Vector2d> f(n, Eigen::Vector2d::Zero());
+    pairs = 0;
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = i + 1; j < n; ++j) {
+        const Eigen::Vector2d d = x[i] - x[j];
+        const double r = d.norm();
+        if (r > sys.cutoff) continue;
+        ++pairs;
+        f[i] += sys.laws[0].force(r) / r * d;
+        f[j] -= sys.laws[0].force(r) / r * d;
+      }
+    double worst = 0.0, scale = 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+      worst = std::max(worst, (lf.state().f[i] - f[i]).norm()), scale = std::max(scale, f[i].norm());
+    ASSERT_LT(worst, 1e-9 * scale) << "dyn (largest force " << scale << " dyn) at step " << lf.state().step;
+  }
+  std::printf("pairs within D at %.2e s: %ld (bonds at the start: %zu); %ld list builds\n", lf.state().time(), pairs,
+              sys.bonds.size(), bond_view<2>(*lf.effects().front()).list_builds);
   EXPECT_GT(pairs, static_cast<long>(sys.bonds.size())) << "the lattice should have collapsed: new pairs within D";
-  EXPECT_LT(worst, 1e-9 * scale) << "dyn (largest force " << scale << " dyn)";
 }
 
 TEST(Dynamics, VerletSkinFitsTheIntactLatticeAndWidensOnceItBreaks) {
@@ -318,10 +324,13 @@ TEST(Dynamics, VerletSkinFitsTheIntactLatticeAndWidensOnceItBreaks) {
   const double gap = std::sqrt(3.0) * sys.r0 - sys.cutoff;
   EXPECT_GT(bond_view<2>(pair).skin, 0.5 * gap);
   EXPECT_LT(bond_view<2>(pair).skin, gap);
-  for (long k = 0; k < 20000; ++k) lf.step();  // quiet: the pulled rows set the pace of rebuilds
+  // Quiet: the pulled rows move far, but the plate stretches nearly affinely, and the list is kept while its
+  // pairs' separations could not have closed the skin (affine_residual in pair.cpp; measured on the raw
+  // displacements instead, as before session 16, it was rebuilt 22 times).
+  for (long k = 0; k < 20000; ++k) lf.step();
   const long quiet_builds = bond_view<2>(pair).list_builds;
   std::printf("first 20,000 steps: %ld list builds, skin %.3g r0\n", quiet_builds, bond_view<2>(pair).skin / sys.r0);
-  EXPECT_LT(quiet_builds, 40);
+  EXPECT_LE(quiet_builds, 10);
   EXPECT_LT(bond_view<2>(pair).skin, gap);
   while (lf.state().time() < 1.2e-2) lf.step();  // broken near 1.0e-2 s
   std::printf("at %.3g s: %ld list builds, skin %.3g r0\n", lf.state().time(), bond_view<2>(pair).list_builds,
