@@ -469,13 +469,6 @@ class PairEffect final : public Effect<D> {
     return g;
   }
 
-  // The displacements since the build, d_i, less the affine map u(x) = A x + c fitted to them by least
-  // squares over x_i at the build: returns the largest residual |d_i - u(x_i)| and the room it may use.
-  // A pair outside the list was at least R = reach + skin apart at the build; now its separation is
-  // (I + A) r + e_i - e_j, at least (1 - |A|_F) R - 2 max|e|. So it cannot have come within reach while
-  // 2 max|e| < room = (1 - |A|_F) R - reach (with A = 0: the skin, the usual Verlet test). A plate pulled
-  // at its edges is stretched nearly affinely: its pulled rows move far, its pairs little (the cutoff
-  // (7,14) plate rebuilt its list every ~900 steps on the raw displacements, 0.8 ms each).
   double max_displacement2(const State<D>& s) const {
     const double* __restrict x = s.x.front().data();
     const double* __restrict x0 = x_build_.data();
@@ -490,6 +483,13 @@ class PairEffect final : public Effect<D> {
     return max2;
   }
 
+  // The displacements since the build, d_i, less the affine map u(x) = A x + c fitted to them by least
+  // squares over x_i at the build: returns the largest residual |d_i - u(x_i)| and the room it may use.
+  // A pair outside the list was at least R = reach + skin apart at the build; now its separation is
+  // (I + A) r + e_i - e_j, at least (1 - |A|_F) R - 2 max|e|. So it cannot have come within reach while
+  // 2 max|e| < room = (1 - |A|_F) R - reach (with A = 0: the skin, the usual Verlet test). A plate pulled
+  // at its edges is stretched nearly affinely: its pulled rows move far, its pairs little (the cutoff
+  // (7,14) plate rebuilt its list every ~900 steps on the raw displacements, 0.8 ms each).
   std::pair<double, double> affine_residual(const State<D>& s) const {
     using M = Eigen::Matrix<double, D, D>;
     const std::size_t n = s.size();
