@@ -74,10 +74,8 @@ class BondStencil {
     // for a whole-body ring below): there it saves stores and zero fills (3-D block: one thread 1.24x / 1.11x
     // on the two cores, two threads 1.02-1.05x). A body whose rings fit ran 0.90x / 0.91x merged (the plate,
     // one / two threads: its 39 and 41 alternate every 40-41 particles). The most populous offsets go first.
-    std::size_t whole_body = particle_grain;
     const long largest = swept.empty() ? 0 : swept.back();
-    while (whole_body < n + static_cast<std::size_t>((largest + 7) / 8 * 8)) whole_body *= 2;
-    const bool merge = merge_offsets && whole_body * swept.size() * D * sizeof(double) > (256u << 10);
+    const bool merge = merge_offsets && !fits_whole(n, swept.size(), aligned_reach(largest));
     if (merge)
       std::stable_sort(swept.begin(), swept.end(), [&](int a, int b) {
         return count[static_cast<std::size_t>(a)] > count[static_cast<std::size_t>(b)];
@@ -179,15 +177,12 @@ class BondStencil {
       offsets_.push_back(static_cast<std::size_t>(g.offsets.front()));
       merged_ = merged_ || g.offsets.size() > 1;
     }
-    reach_ = (reach_ + 7) / 8 * 8;  // keeps each thread's buffers 64-byte aligned like its particles
+    reach_ = aligned_reach(reach_);
     // a block's assembly reads back to F[b0 - reach]; the block being swept must not overwrite it
-    ring_ = particle_grain;
-    while (ring_ < static_cast<std::size_t>(reach_) + particle_grain) ring_ *= 2;
+    ring_ = ring_of(static_cast<std::size_t>(reach_) + particle_grain);
     // small bodies: one slot per particle if that fits in L2 (the plate: 1.5 us a step slower on a ring of
     // two blocks, as the gaps between runs must then be zeroed)
-    std::size_t whole = ring_;
-    while (whole < n_ + static_cast<std::size_t>(reach_)) whole *= 2;
-    if (whole * groups_.size() * D * sizeof(double) <= (256u << 10)) ring_ = whole;
+    if (fits_whole(n_, groups_.size(), reach_)) ring_ = whole_ring(n_, reach_);
     // if no slot is ever reused, the slots no bond maps to keep their initial zeros
     wraps_ = ring_ < n_ + static_cast<std::size_t>(reach_);
   }
@@ -245,6 +240,23 @@ class BondStencil {
   }
 
  private:
+  /// The reach rounded up to whole cache lines: keeps each thread's buffers 64-byte aligned like its particles.
+  static long aligned_reach(long reach) { return (reach + 7) / 8 * 8; }
+  /// The smallest ring (a block times a power of two) of at least `least` slots.
+  static std::size_t ring_of(std::size_t least) {
+    std::size_t r = particle_grain;
+    while (r < least) r *= 2;
+    return r;
+  }
+  /// A ring in which no slot holds two particles: n + reach slots, at least a block plus the reach.
+  static std::size_t whole_ring(std::size_t n, long reach) {
+    return ring_of(std::max(n, static_cast<std::size_t>(particle_grain)) + static_cast<std::size_t>(reach));
+  }
+  /// Whether a thread's rings of `groups` groups may hold every particle once and still fit in L2.
+  static bool fits_whole(std::size_t n, std::size_t groups, long reach) {
+    return whole_ring(n, reach) * groups * D * sizeof(double) <= (256u << 10);
+  }
+
   struct Run {
     long begin, end;  ///< [begin, end) of i
     int offset;       ///< the bonds (i, i + offset)
