@@ -40,6 +40,7 @@ struct StencilTerm {
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <type_traits>
 
 namespace pmfrag::detail {
 
@@ -74,18 +75,23 @@ inline long sweep_fixed_avx512(const double* __restrict x0, const double* __rest
   const __m512d vcut2 = _mm512_set1_pd(cut2), vrmin = _mm512_set1_pd(16.0 * inv_rmin);
   const __m512d three = _mm512_set1_pd(3.0), twelve = _mm512_set1_pd(12.0);
   long broke = 0;
-  for (std::size_t i = 0; i < m; i += 8) {
-    const std::size_t left = m - i;
-    const __mmask8 lanes = first_lanes(left);
-    const __m512d d0 = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, x0 + i), _mm512_maskz_loadu_pd(lanes, x0 + i + o));
-    const __m512d d1 = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, x1 + i), _mm512_maskz_loadu_pd(lanes, x1 + i + o));
+  // Full vectors with plain loads and stores, the last partial one masked: a masked load cost ~7 % of the
+  // sweep's time even with every lane set (measured: 9.4 against 10.1 time-stamp cycles per eight bonds),
+  // and a masked store cannot forward its data to the assembly's loads.
+  const auto eight = [&](std::size_t i, auto full) {
+    constexpr bool Full = decltype(full)::value;
+    const __mmask8 lanes = first_lanes(m - i);
+    const auto load = [&](const double* a) { return Full ? _mm512_loadu_pd(a) : _mm512_maskz_loadu_pd(lanes, a); };
+    const __m512d d0 = _mm512_sub_pd(load(x0 + i), load(x0 + i + o));
+    const __m512d d1 = _mm512_sub_pd(load(x1 + i), load(x1 + i + o));
     __m512d r2 = _mm512_fmadd_pd(d1, d1, _mm512_mul_pd(d0, d0));
     __m512d d2 = _mm512_setzero_pd();
     if constexpr (D == 3) {
-      d2 = _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, x2 + i), _mm512_maskz_loadu_pd(lanes, x2 + i + o));
+      d2 = _mm512_sub_pd(load(x2 + i), load(x2 + i + o));
       r2 = _mm512_fmadd_pd(d2, d2, r2);
     }
-    const __m128i a8 = _mm_maskz_loadu_epi8(lanes, alive + i);
+    const __m128i a8 = Full ? _mm_loadl_epi64(reinterpret_cast<const __m128i*>(alive + i))
+                            : _mm_maskz_loadu_epi8(lanes, alive + i);
     const __mmask8 live = _mm512_test_epi64_mask(_mm512_cvtepu8_epi64(a8), _mm512_set1_epi64(0xff)) & lanes;
     const __mmask8 within = _mm512_cmp_pd_mask(r2, vcut2, _CMP_LE_OQ);
     broke += __builtin_popcount(static_cast<unsigned>(live & static_cast<__mmask8>(~within)));
@@ -97,7 +103,7 @@ inline long sweep_fixed_avx512(const double* __restrict x0, const double* __rest
     const __m512d iep = pw<P>(ie);
     const __m512d mag = _mm512_mul_pd(iep, _mm512_fmsub_pd(vH, pw<Q - P>(ie), vG));  // > 0 repulsive
     const __m512d fr = _mm512_maskz_mov_pd(live & within, _mm512_mul_pd(mag, y));
-    if (left >= 8) {  // plain stores: a masked store cannot forward its data to the assembly's loads
+    if constexpr (Full) {
       _mm512_storeu_pd(F0 + i, _mm512_mul_pd(fr, d0));
       _mm512_storeu_pd(F1 + i, _mm512_mul_pd(fr, d1));
       if constexpr (D == 3) _mm512_storeu_pd(F2 + i, _mm512_mul_pd(fr, d2));
@@ -106,7 +112,10 @@ inline long sweep_fixed_avx512(const double* __restrict x0, const double* __rest
       _mm512_mask_storeu_pd(F1 + i, lanes, _mm512_mul_pd(fr, d1));
       if constexpr (D == 3) _mm512_mask_storeu_pd(F2 + i, lanes, _mm512_mul_pd(fr, d2));
     }
-  }
+  };
+  std::size_t i = 0;
+  for (; i + 8 <= m; i += 8) eight(i, std::true_type{});
+  if (i < m) eight(i, std::false_type{});
   return broke;
 }
 
