@@ -125,6 +125,13 @@ template <int D, bool Assign>
 inline void store_block_sums(const __m512d (&a)[D], double* fk, std::size_t left) {
   if constexpr (D == 2) {  // interleave (a0, a1) into x, y pairs: particles k..k+3 and k+4..k+7
     const __m512i lo = _mm512_set_epi64(11, 3, 10, 2, 9, 1, 8, 0), hi = _mm512_set_epi64(15, 7, 14, 6, 13, 5, 12, 4);
+    if (left >= 8) {  // plain loads and stores (see sweep_fixed_avx512)
+      const __m512d f0 = Assign ? _mm512_setzero_pd() : _mm512_loadu_pd(fk);
+      const __m512d f1 = Assign ? _mm512_setzero_pd() : _mm512_loadu_pd(fk + 8);
+      _mm512_storeu_pd(fk, _mm512_add_pd(f0, _mm512_permutex2var_pd(a[0], lo, a[1])));
+      _mm512_storeu_pd(fk + 8, _mm512_add_pd(f1, _mm512_permutex2var_pd(a[0], hi, a[1])));
+      return;
+    }
     const __mmask8 mlo = left >= 4 ? __mmask8(0xff) : __mmask8((1u << (2 * left)) - 1u);
     const __mmask8 mhi = left >= 8 ? __mmask8(0xff) : left > 4 ? __mmask8((1u << (2 * (left - 4))) - 1u) : __mmask8(0);
     const __m512d f0 = Assign ? _mm512_setzero_pd() : _mm512_maskz_loadu_pd(mlo, fk);
@@ -137,6 +144,15 @@ inline void store_block_sums(const __m512d (&a)[D], double* fk, std::size_t left
     alignas(64) static constexpr long long with_z[3][8] = {
         {0, 1, 8, 3, 4, 9, 6, 7}, {10, 1, 2, 11, 4, 5, 12, 7}, {0, 13, 2, 3, 14, 5, 6, 15}};
     const std::size_t values = 3 * (left < 8 ? left : 8);
+    if (left >= 8) {
+      for (std::size_t v = 0; v < 3; ++v) {
+        const __m512d t = _mm512_permutex2var_pd(a[0], _mm512_load_si512(xy[v]), a[1]);
+        const __m512d out = _mm512_permutex2var_pd(t, _mm512_load_si512(with_z[v]), a[2]);
+        const __m512d old = Assign ? _mm512_setzero_pd() : _mm512_loadu_pd(fk + 8 * v);
+        _mm512_storeu_pd(fk + 8 * v, _mm512_add_pd(old, out));
+      }
+      return;
+    }
     for (std::size_t v = 0; v < 3; ++v) {
       const __mmask8 m = values >= 8 * (v + 1) ? __mmask8(0xff)
                          : values > 8 * v    ? __mmask8((1u << (values - 8 * v)) - 1u)
@@ -163,20 +179,25 @@ inline void assemble_block_avx512(const double* rows, std::size_t at, std::size_
   std::ptrdiff_t back[max_stencil_offsets];  // from F_g[i] to F_g[i - o_g]
   for (std::size_t g = 0; g < groups; ++g)
     back[g] = static_cast<std::ptrdiff_t>((at + mask + 1 - offsets[g]) & mask) - static_cast<std::ptrdiff_t>(at);
-  for (std::size_t k = 0; k < len; k += 8) {
+  const auto eight = [&](std::size_t k, auto full) {  // full vectors load plainly (see sweep_fixed_avx512)
+    constexpr bool Full = decltype(full)::value;
     const std::size_t left = len - k;
     const __mmask8 lanes = first_lanes(left);
+    const auto load = [&](const double* p) { return Full ? _mm512_loadu_pd(p) : _mm512_maskz_loadu_pd(lanes, p); };
     __m512d a[D];
     for (int c = 0; c < D; ++c) a[c] = _mm512_setzero_pd();
     for (std::size_t g = 0; g < groups; ++g)
       for (int c = 0; c < D; ++c) {
         const double* F = rows + (g * D + static_cast<std::size_t>(c)) * stride + at + k;
-        a[c] = _mm512_add_pd(a[c], _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, F), _mm512_maskz_loadu_pd(lanes, F + back[g])));
+        a[c] = _mm512_add_pd(a[c], _mm512_sub_pd(load(F), load(F + back[g])));
       }
     if (extra)
-      for (int c = 0; c < D; ++c) a[c] = _mm512_add_pd(a[c], _mm512_maskz_loadu_pd(lanes, extra[c] + k));
+      for (int c = 0; c < D; ++c) a[c] = _mm512_add_pd(a[c], load(extra[c] + k));
     store_block_sums<D, Assign>(a, f + k * D, left);
-  }
+  };
+  std::size_t k = 0;
+  for (; k + 8 <= len; k += 8) eight(k, std::true_type{});
+  if (k < len) eight(k, std::false_type{});
 }
 
 /// assemble_block_avx512 for groups of several offsets: f_i += sum over the groups g of F_g[i] - F_g[i - o] for each
@@ -196,9 +217,11 @@ inline void assemble_block_grouped_avx512(const double* rows, std::size_t at, st
   for (std::size_t g = 0; g < groups; ++g) nterms += group_terms[g];
   for (std::size_t t = 0; t < nterms; ++t)
     back[t] = static_cast<std::ptrdiff_t>((at + mask + 1 - terms[t].offset) & mask) - static_cast<std::ptrdiff_t>(at);
-  for (std::size_t k = 0; k < len; k += 8) {
+  const auto eight = [&](std::size_t k, auto full) {  // full vectors load plainly (see sweep_fixed_avx512)
+    constexpr bool Full = decltype(full)::value;
     const std::size_t left = len - k;
     const __mmask8 lanes = first_lanes(left);
+    const auto load = [&](const double* p) { return Full ? _mm512_loadu_pd(p) : _mm512_maskz_loadu_pd(lanes, p); };
     __m512d a[D];
     for (int c = 0; c < D; ++c) a[c] = _mm512_setzero_pd();
     std::size_t t0 = 0;
@@ -208,7 +231,7 @@ inline void assemble_block_grouped_avx512(const double* rows, std::size_t at, st
         const std::ptrdiff_t b = back[t0];
         for (int c = 0; c < D; ++c) {
           const double* F = Fg + static_cast<std::size_t>(c) * stride;
-          a[c] = _mm512_add_pd(a[c], _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, F), _mm512_maskz_loadu_pd(lanes, F + b)));
+          a[c] = _mm512_add_pd(a[c], _mm512_sub_pd(load(F), _mm512_maskz_loadu_pd(lanes, F + b)));
         }
         continue;
       }
@@ -221,7 +244,7 @@ inline void assemble_block_grouped_avx512(const double* rows, std::size_t at, st
         const __mmask8 m = __mmask8(code & lanes);
         for (int c = 0; c < D; ++c) {
           const double* F = Fg + static_cast<std::size_t>(c) * stride;
-          a[c] = _mm512_add_pd(a[c], _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, F), _mm512_maskz_loadu_pd(m, F + b)));
+          a[c] = _mm512_add_pd(a[c], _mm512_sub_pd(load(F), _mm512_maskz_loadu_pd(m, F + b)));
         }
         continue;
       }
@@ -232,13 +255,16 @@ inline void assemble_block_grouped_avx512(const double* rows, std::size_t at, st
         const double* F = Fg + static_cast<std::size_t>(c) * stride;
         __m512d v = _mm512_maskz_loadu_pd(reach[0], F + back[t0]);
         for (std::size_t t = 1; t < nt; ++t) v = _mm512_mask_loadu_pd(v, reach[t], F + back[t0 + t]);
-        a[c] = _mm512_add_pd(a[c], _mm512_sub_pd(_mm512_maskz_loadu_pd(lanes, F), v));
+        a[c] = _mm512_add_pd(a[c], _mm512_sub_pd(load(F), v));
       }
     }
     if (extra)
-      for (int c = 0; c < D; ++c) a[c] = _mm512_add_pd(a[c], _mm512_maskz_loadu_pd(lanes, extra[c] + k));
+      for (int c = 0; c < D; ++c) a[c] = _mm512_add_pd(a[c], load(extra[c] + k));
     store_block_sums<D, Assign>(a, f + k * D, left);
-  }
+  };
+  std::size_t k = 0;
+  for (; k + 8 <= len; k += 8) eight(k, std::true_type{});
+  if (k < len) eight(k, std::false_type{});
 }
 
 }  // namespace pmfrag::detail
