@@ -22,6 +22,11 @@ trap 'rm -rf "$work"' EXIT
 mpi=(mpirun --allow-run-as-root --oversubscribe -np 2)
 
 median3() { sort -g | sed -n 2p; }  # the machine is shared and noisy: the median of three runs
+# The throughput rows run REPS pairs (default 5): pmfrag, then LAMMPS at once, so the two of a pair see the
+# machine in one state. The ratio is the median of the pairs' ratios: in a minute when one core ran slow, a
+# pair's two runs both were, while the medians of the two codes' rates could come from different minutes.
+reps=${REPS:-5}
+median() { sort -g | awk '{a[NR] = $1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
 # This VM's two virtual cores do not run at one speed: for minutes at a time one runs both codes ~1.45x
 # slower than the other (pmfrag 1.8e8 against 2.7e8, LAMMPS 1.65e7 against 2.4e7 on the bonded plate,
 # session 9). So one-core runs of both codes are pinned to the same core, and the runs alternate
@@ -46,7 +51,8 @@ pmfrag_once() {  # pmfrag_once SCENE MODEL THREADS STEPS DT -> particle-steps/s 
 
 echo "machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) cores; $(date -u +%F)"
 echo "(one-core runs of both codes pinned to core $(($(nproc) - 1)); 'steps on' = pmfrag's steps per thread count)"
-printf "%-28s %-7s %14s %14s %8s  %s\n" scene threads pmfrag LAMMPS ratio "(steps run; pmfrag steps on threads:count)"
+echo "(rates: medians of $reps runs; ratio: the median of the $reps pairs' ratios, each pair's listed)"
+printf "%-28s %-7s %14s %14s %8s  %s\n" scene threads pmfrag LAMMPS ratio "(steps run; pairs' ratios; pmfrag steps on threads:count)"
 for scene in slit_plate_7_14 block3d_slit; do
   steps=$steps2d; models="cutoff bonded"
   if [ $scene = block3d_slit ]; then steps=$steps3d; models="bonded"; fi
@@ -61,21 +67,26 @@ for scene in slit_plate_7_14 block3d_slit; do
     fi
     for t in 1 2; do
       : > "$work/ours" ; : > "$work/theirs"; : > "$work/tight"; : > "$work/used_threads"
-      for _ in 1 2 3; do
-        pmfrag_once "cases/$scene.toml" "$model" "$t" "$msteps" "$dt" >> "$work/ours"
-        lammps_once "$input" "$t" >> "$work/theirs"
+      : > "$work/ratios"
+      for _ in $(seq "$reps"); do
+        a=$(pmfrag_once "cases/$scene.toml" "$model" "$t" "$msteps" "$dt")
+        b=$(lammps_once "$input" "$t")
         # pmfrag adapts its skin: LAMMPS gets its faster of the wide and the tight skin
-        [ "$model" = cutoff ] && lammps_once "$work/lmp_$scene/cutoff_tight.in" "$t" >> "$work/tight"
+        if [ "$model" = cutoff ]; then
+          c=$(lammps_once "$work/lmp_$scene/cutoff_tight.in" "$t")
+          echo "$c" >> "$work/tight"
+          b=$(awk "BEGIN{print ($c > $b) ? $c : $b}")
+        fi
+        echo "$a" >> "$work/ours"; echo "$b" >> "$work/theirs"
+        awk "BEGIN{print $a / $b}" >> "$work/ratios"
       done
-      ours=$(median3 < "$work/ours"); theirs=$(median3 < "$work/theirs")
+      ours=$(median < "$work/ours"); theirs=$(median < "$work/theirs")
       note=""
-      if [ "$model" = cutoff ]; then
-        tight=$(median3 < "$work/tight")
-        note="; LAMMPS skin 0.3 r0 $theirs, tight $tight"
-        theirs=$(awk "BEGIN{print ($tight > $theirs) ? $tight : $theirs}")
-      fi
-      printf "%-28s %-7s %14s %14s %8s  (%s steps; %s%s)\n" "$scene ($model)" "$t" "$ours" "$theirs" \
-        "$(awk "BEGIN{printf \"%.1fx\", $ours / $theirs}")" "$msteps" "$(paste -sd' ' "$work/used_threads")" "$note"
+      [ "$model" = cutoff ] && note="; LAMMPS tight skin $(median < "$work/tight")"
+      printf "%-28s %-7s %14s %14s %8s  (%s steps; pairs %s; %s%s)\n" "$scene ($model)" "$t" "$ours" "$theirs" \
+        "$(median < "$work/ratios" | awk '{printf "%.1fx", $1}')" "$msteps" \
+        "$(sort -g "$work/ratios" | awk '{printf "%s%.1f", NR > 1 ? "/" : "", $1}')" \
+        "$(paste -sd' ' "$work/used_threads")" "$note"
     done
   done
 done
