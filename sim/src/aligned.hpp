@@ -1,28 +1,4 @@
-// Cache-line aligned storage for the vector kernels (a 64-byte load from an array that std::allocator
-// placed 16 bytes into a line touches two lines) and for arrays that threads write.
+// The allocator lives with the public headers (State's particle arrays use it).
 #pragma once
 
-#include <cstddef>
-#include <new>
-
-namespace pmfrag::detail {
-
-template <class T>
-struct AlignedAllocator {
-  using value_type = T;
-  static constexpr std::align_val_t alignment{64};
-  AlignedAllocator() = default;
-  template <class U>
-  AlignedAllocator(const AlignedAllocator<U>&) {}
-  // Whole lines: an array written by one thread then shares no line with another thread's array (false
-  // sharing between this VM's virtual cores costs 150-600 ns a line).
-  static std::size_t bytes(std::size_t n) { return (n * sizeof(T) + 63) / 64 * 64; }
-  T* allocate(std::size_t n) { return static_cast<T*>(::operator new(bytes(n), alignment)); }
-  void deallocate(T* p, std::size_t) { ::operator delete(p, alignment); }
-  template <class U>
-  bool operator==(const AlignedAllocator<U>&) const {
-    return true;
-  }
-};
-
-}  // namespace pmfrag::detail
+#include "pmfrag/aligned.hpp"

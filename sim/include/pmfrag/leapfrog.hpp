@@ -89,7 +89,7 @@ class Leapfrog {
     double inv_mass;
   };
   std::vector<MassRun> mass_runs_;
-  std::vector<double> moves_;  ///< per thread, a cache line: the last move's largest squared component, bad
+  AlignedVector<double> moves_;  ///< per thread, a cache line: the last move's largest squared component, bad
                                ///< count (and, in resident steps, the events its last forces found)
   std::vector<Effect<D>*> resident_;
   bool resident_ok_ = true;     ///< every effect acting in a step has resident steps
@@ -97,8 +97,8 @@ class Leapfrog {
   bool uniform_ = true;  ///< every step so far had the same dt: time = step x dt exactly
   std::unique_ptr<detail::ThreadTuner> tuner_;  ///< how many threads each step runs on
   std::unique_ptr<detail::LoadBalancer> balancer_;  ///< each thread's share of the particles
-  std::vector<double> busy_;  ///< per thread, a cache line: its busy time in the last resident steps
-  std::vector<V> x_alt_;      ///< resident steps: the positions' second buffer
+  AlignedVector<double> busy_;  ///< per thread, a cache line: its busy time in the last resident steps
+  AlignedVector<V> x_alt_;    ///< resident steps: the positions' second buffer
 };
 
 }  // namespace pmfrag

@@ -18,8 +18,9 @@ class CellList {
 
   /// Calls f(i, j, r2) once for every pair i < j with |x_i - x_j|^2 < cutoff^2, in a fixed order that
   /// depends only on the positions (so lists built from equal positions are equal).
-  template <class F>
-  void for_each_pair(const std::vector<V>& x, double cutoff, F&& f) {
+  /// x: a vector of V, whatever its allocator.
+  template <class Positions, class F>
+  void for_each_pair(const Positions& x, double cutoff, F&& f) {
     const std::size_t n = x.size();
     checks_ = 0;
     if (n < 2) return;
