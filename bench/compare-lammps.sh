@@ -85,7 +85,7 @@ for scene in slit_plate_7_14 block3d_slit; do
       [ "$model" = cutoff ] && note="; LAMMPS tight skin $(median < "$work/tight")"
       printf "%-28s %-7s %14s %14s %8s  (%s steps; pairs %s; %s%s)\n" "$scene ($model)" "$t" "$ours" "$theirs" \
         "$(median < "$work/ratios" | awk '{printf "%.1fx", $1}')" "$msteps" \
-        "$(sort -g "$work/ratios" | awk '{printf "%s%.1f", NR > 1 ? "/" : "", $1}')" \
+        "$(sort -g "$work/ratios" | awk '{printf "%s%.1f", (NR > 1 ? "/" : ""), $1}')" \
         "$(paste -sd' ' "$work/used_threads")" "$note"
     done
   done
