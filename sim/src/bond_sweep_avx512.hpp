@@ -231,7 +231,7 @@ inline void assemble_block_grouped_avx512(const double* rows, std::size_t at, st
         const std::ptrdiff_t b = back[t0];
         for (int c = 0; c < D; ++c) {
           const double* F = Fg + static_cast<std::size_t>(c) * stride;
-          a[c] = _mm512_add_pd(a[c], _mm512_sub_pd(load(F), _mm512_maskz_loadu_pd(lanes, F + b)));
+          a[c] = _mm512_add_pd(a[c], _mm512_sub_pd(load(F), load(F + b)));
         }
         continue;
       }
