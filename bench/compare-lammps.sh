@@ -21,10 +21,10 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 mpi=(mpirun --allow-run-as-root --oversubscribe -np 2)
 
-median3() { sort -g | sed -n 2p; }  # the machine is shared and noisy: the median of three runs
-# The throughput rows run REPS pairs (default 5): pmfrag, then LAMMPS at once, so the two of a pair see the
-# machine in one state. The ratio is the median of the pairs' ratios: in a minute when one core ran slow, a
-# pair's two runs both were, while the medians of the two codes' rates could come from different minutes.
+# The machine is shared and noisy: every figure is a median of several runs. The throughput rows run REPS
+# pairs (default 5): pmfrag, then LAMMPS at once, so the two of a pair see the machine in one state. The ratio
+# is the median of the pairs' ratios: in a minute when one core ran slow, a pair's two runs both were, while
+# the medians of the two codes' rates could come from different minutes.
 reps=${REPS:-5}
 median() { sort -g | awk '{a[NR] = $1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
 # This VM's two virtual cores do not run at one speed: for minutes at a time one runs both codes ~1.45x
@@ -101,7 +101,7 @@ echo "slit plate (cutoff) whole run, 0 to 1.5e-2 s ($whole steps), 1 thread: pmf
   "$(awk "BEGIN{printf \"%.1fx\", $theirs / $ours}")"
 
 # The plate split between two threads anyway (the engine would use one): what the synchronization costs.
-forced=$(for _ in 1 2 3; do PMFRAG_MIN_PARTICLES_PER_THREAD=1 pmfrag_once cases/slit_plate_7_14.toml bonded 2 "$steps_bonded" 1e-7; done | median3)
+forced=$(for _ in 1 2 3; do PMFRAG_MIN_PARTICLES_PER_THREAD=1 pmfrag_once cases/slit_plate_7_14.toml bonded 2 "$steps_bonded" 1e-7; done | median)
 echo "slit plate (bonded) forced onto 2 threads: $forced particle-steps/s"
 
 # Only what a scene declares is computed: the plate with pair + kinematic, and with every effect declared.
@@ -110,7 +110,7 @@ effects_rate() {
     "$pmfrag" run cases/slit_plate_7_14.toml --out "$work/effects" --force -q --set time.end=2e-3 --set output.every=1 "$@" \
       > /dev/null
     sed -n 's/.*"particle_steps_per_s": *\([0-9.e+-]*\).*/\1/p' "$work/effects/run.json"
-  done | median3
+  done | median
 }
 only=$(effects_rate)
 every=$(effects_rate --set 'gravity.g=[0,-980]' --set damping.gamma=1.0 --set greenspan_alpha.enabled=true)
@@ -120,7 +120,7 @@ echo "effects: pair + kinematic $only particle-steps/s; + gravity, damping, gree
 for _ in 1 2 3; do
   TIMEFORMAT=%R
   { time "$pmfrag" run cases/slit_plate_7_14.toml --out "$work/fig6" --force -q --set time.end=1.03e-2 > /dev/null; } 2>&1
-done | median3 | awk '{printf "Fig. 6 run (103,000 steps, 2698 particles, 2 threads, frames every 1e-4 s): %.2f s wall (median of 3)\n", $1}'
+done | median | awk '{printf "Fig. 6 run (103,000 steps, 2698 particles, 2 threads, frames every 1e-4 s): %.2f s wall (median of 3)\n", $1}'
 
 # Agreement: final positions of the 2-D plate after the same steps, both readings.
 for model in cutoff bonded; do

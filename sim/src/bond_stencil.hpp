@@ -17,7 +17,7 @@
 // for any thread count.
 #pragma once
 
-#include "aligned.hpp"
+#include "pmfrag/aligned.hpp"
 #include "bond_sweep_avx512.hpp"
 #include "pair_kernels.hpp"
 #include "team.hpp"

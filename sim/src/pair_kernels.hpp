@@ -2,7 +2,7 @@
 // inlined; the paper's three laws get compile-time exponents) and a pair table with a per-particle gather.
 #pragma once
 
-#include "aligned.hpp"
+#include "pmfrag/aligned.hpp"
 
 #include "pmfrag/pair_law.hpp"
 #include "team.hpp"

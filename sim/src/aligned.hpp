@@ -1,4 +1,0 @@
-// The allocator lives with the public headers (State's particle arrays use it).
-#pragma once
-
-#include "pmfrag/aligned.hpp"
