@@ -177,6 +177,7 @@ class BondStencil {
       offsets_.push_back(static_cast<std::size_t>(g.offsets.front()));
       merged_ = merged_ || g.offsets.size() > 1;
     }
+    four_ = D == 2 && !merged_ && groups_.size() == 4;
     reach_ = aligned_reach(reach_);
     // a block's assembly reads back to F[b0 - reach]; the block being swept must not overwrite it
     ring_ = ring_of(static_cast<std::size_t>(reach_) + particle_grain);
@@ -500,6 +501,10 @@ class BondStencil {
       else
         assemble_block_grouped_avx512<D, false>(w.F.data(), at, ring_ - 1, w.stride, terms_.data(), group_terms_.data(),
                                                 group_codes_.data(), group_terms_.size(), lane0, ex, fb, len);
+    } else if (four_ && assign_) {
+      assemble_block_four_avx512<true>(w.F.data(), at, ring_ - 1, w.stride, offsets_.data(), ex, fb, len);
+    } else if (four_) {
+      assemble_block_four_avx512<false>(w.F.data(), at, ring_ - 1, w.stride, offsets_.data(), ex, fb, len);
     } else if (assign_) {
       assemble_block_avx512<D, true>(w.F.data(), at, ring_ - 1, w.stride, offsets_.data(), groups_.size(), ex, fb, len);
     } else {
@@ -545,6 +550,7 @@ class BondStencil {
   std::vector<const std::uint16_t*> group_codes_;  ///< Group::codes, or nullptr
   std::vector<std::size_t> offsets_;  ///< each group's first offset (its only one unless merged_)
   bool merged_ = false;               ///< some group has several offsets
+  bool four_ = false;                 ///< 2-D, four groups of one offset each (the plate): assemble_block_four_avx512
   std::vector<int> sparse_i_, sparse_j_, sparse_law_;  ///< off-stencil bonds
   std::vector<std::uint8_t> sparse_alive_;
   std::vector<std::pair<int, int>> loc_;  ///< bond -> (group or -1 for off-stencil, index)
