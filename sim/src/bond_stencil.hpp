@@ -324,7 +324,8 @@ class BondStencil {
       w.xlo = std::max(0L, w.pb - reach_);
       w.xhi = std::min(n, w.pe + reach_);
       if (w.pb >= w.pe) w.xlo = w.xhi = w.pb;
-      for (auto& c : w.xs) c.assign(static_cast<std::size_t>(w.xhi - w.xlo), 0.0);
+      // 8 more: the sweep reads whole aligned eights, up to 7 positions past a run's last partner
+      for (auto& c : w.xs) c.assign(static_cast<std::size_t>(w.xhi - w.xlo) + 8, 0.0);
       w.sparse_alive.resize(w.sparse_id.size());
       for (const Group& g : groups_) {
         const long from = std::max(0L, w.pb - g.max_offset);
@@ -428,7 +429,7 @@ class BondStencil {
 #ifdef PMFRAG_HAVE_AVX512_SWEEP
     if constexpr (std::is_same_v<Real, double> && is_fixed_law<Law>::value) {
       if (fixed_avx512_scales<Law::p, Law::q>(law.G, law.H)) {
-        broke += sweep_fixed_avx512<D, Law::p, Law::q>(x0, x1, x2, o, alive, F0, F1, F2, m, law.G,
+        broke += sweep_fixed_avx512<D, Law::p, Law::q>(x0, x1, x2, o, alive, F0, F1, F2, m, ub & 7, law.G,
                                                        law.H, cut2, inv_rmin);
         return;
       }

@@ -80,11 +80,13 @@ inline __m512d load_eight(__mmask8 lanes, const double* p) {
 }
 
 /// Bonds (i, i + o) for i in [0, m) of one offset: F[i] = F(r)/r (x_i - x_{i+o}) (zero for bonds gone or
-/// longer than sqrt(cut2)); returns the number of intact bonds found longer than sqrt(cut2).
+/// longer than sqrt(cut2)); returns the number of intact bonds found longer than sqrt(cut2). The pointers are at
+/// i = 0, which lies `lead` slots past a multiple of eight particles (x, F 64-byte aligned there). The loop runs
+/// on those aligned eights, the lanes outside [0, m) masked off.
 template <int D, int P, int Q>
 inline long sweep_fixed_avx512(const double* __restrict x0, const double* __restrict x1, const double* __restrict x2,
                                std::size_t o, const std::uint8_t* __restrict alive, double* __restrict F0,
-                               double* __restrict F1, double* __restrict F2, std::size_t m,
+                               double* __restrict F1, double* __restrict F2, std::size_t m, std::size_t lead,
                                double G, double H, double cut2, double inv_rmin) {
   static_assert(Q >= P, "the factored form needs q >= p");
   // y carries a factor s = 16: ie^p (H ie^(q-p) - G) y = (s ie)^p (H s^-(q+1) (s ie)^(q-p) - G s^-(p+1)) (s y)
@@ -93,16 +95,14 @@ inline long sweep_fixed_avx512(const double* __restrict x0, const double* __rest
   const __m512d vcut2 = _mm512_set1_pd(cut2), vrmin = _mm512_set1_pd(16.0 * inv_rmin);
   const __m512d three = _mm512_set1_pd(3.0), twelve = _mm512_set1_pd(12.0);
   long broke = 0;
-  by_eight(m, [&](std::size_t i, auto full) {
+  const auto eight = [&](std::ptrdiff_t i, __mmask8 lanes, auto full) __attribute__((always_inline)) {
     constexpr bool Full = decltype(full)::value;
-    const __mmask8 lanes = first_lanes(m - i);
-    const auto load = [&](const double* a) { return load_eight<Full>(lanes, a); };
-    const __m512d d0 = _mm512_sub_pd(load(x0 + i), load(x0 + i + o));
-    const __m512d d1 = _mm512_sub_pd(load(x1 + i), load(x1 + i + o));
+    const __m512d d0 = _mm512_sub_pd(_mm512_load_pd(x0 + i), _mm512_loadu_pd(x0 + i + o));
+    const __m512d d1 = _mm512_sub_pd(_mm512_load_pd(x1 + i), _mm512_loadu_pd(x1 + i + o));
     __m512d r2 = _mm512_fmadd_pd(d1, d1, _mm512_mul_pd(d0, d0));
     __m512d d2 = _mm512_setzero_pd();
     if constexpr (D == 3) {
-      d2 = _mm512_sub_pd(load(x2 + i), load(x2 + i + o));
+      d2 = _mm512_sub_pd(_mm512_load_pd(x2 + i), _mm512_loadu_pd(x2 + i + o));
       r2 = _mm512_fmadd_pd(d2, d2, r2);
     }
     const __m128i a8 = Full ? _mm_loadl_epi64(reinterpret_cast<const __m128i*>(alive + i))
@@ -119,15 +119,25 @@ inline long sweep_fixed_avx512(const double* __restrict x0, const double* __rest
     const __m512d mag = _mm512_mul_pd(iep, _mm512_fmsub_pd(vH, pw<Q - P>(ie), vG));  // > 0 repulsive
     const __m512d fr = _mm512_maskz_mov_pd(live & within, _mm512_mul_pd(mag, y));
     if constexpr (Full) {
-      _mm512_storeu_pd(F0 + i, _mm512_mul_pd(fr, d0));
-      _mm512_storeu_pd(F1 + i, _mm512_mul_pd(fr, d1));
-      if constexpr (D == 3) _mm512_storeu_pd(F2 + i, _mm512_mul_pd(fr, d2));
+      _mm512_store_pd(F0 + i, _mm512_mul_pd(fr, d0));
+      _mm512_store_pd(F1 + i, _mm512_mul_pd(fr, d1));
+      if constexpr (D == 3) _mm512_store_pd(F2 + i, _mm512_mul_pd(fr, d2));
     } else {
-      _mm512_mask_storeu_pd(F0 + i, lanes, _mm512_mul_pd(fr, d0));
-      _mm512_mask_storeu_pd(F1 + i, lanes, _mm512_mul_pd(fr, d1));
-      if constexpr (D == 3) _mm512_mask_storeu_pd(F2 + i, lanes, _mm512_mul_pd(fr, d2));
+      _mm512_mask_store_pd(F0 + i, lanes, _mm512_mul_pd(fr, d0));
+      _mm512_mask_store_pd(F1 + i, lanes, _mm512_mul_pd(fr, d1));
+      if constexpr (D == 3) _mm512_mask_store_pd(F2 + i, lanes, _mm512_mul_pd(fr, d2));
     }
-  });
+  };
+  const std::ptrdiff_t end = static_cast<std::ptrdiff_t>(m);
+  std::ptrdiff_t i = -static_cast<std::ptrdiff_t>(lead);
+  if (lead > 0) {
+    const unsigned from = ~((1u << lead) - 1u);
+    const unsigned to = end - i >= 8 ? 0xffu : (1u << (end - i)) - 1u;
+    eight(i, __mmask8(from & to), std::false_type{});
+    i += 8;
+  }
+  for (; i + 8 <= end; i += 8) eight(i, __mmask8(0xff), std::true_type{});
+  if (i < end) eight(i, __mmask8((1u << (end - i)) - 1u), std::false_type{});
   return broke;
 }
 
