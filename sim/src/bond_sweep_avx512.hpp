@@ -239,7 +239,7 @@ inline void assemble_block_four_avx512(const double* rows, std::size_t at, std::
     __m512i cut;          // lanes m .. m + 7 of (before, next)
   };
   const __m512i iota = _mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0);
-  const auto stream = [&](std::size_t g, std::size_t c) {
+  const auto stream = [&](std::size_t g, std::size_t c) __attribute__((always_inline)) {
     const std::size_t b = (at + mask + 1 - offsets[g]) & mask;  // slot of F_g[i - o_g] for the block's first i
     const std::size_t m = b & 7;  // the rows are 64-byte aligned and the stride is a multiple of eight
     const double* row = rows + (g * 2 + c) * stride;
