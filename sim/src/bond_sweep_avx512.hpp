@@ -205,17 +205,28 @@ inline void assemble_block_avx512(const double* rows, std::size_t at, std::size_
     constexpr bool Full = decltype(full)::value;
     const std::size_t left = len - k;
     const __mmask8 lanes = first_lanes(left);
-    const auto load = [&](const double* p) { return load_eight<Full>(lanes, p); };
-    __m512d a[D];
-    for (int c = 0; c < D; ++c) a[c] = _mm512_setzero_pd();
-    for (std::size_t g = 0; g < groups; ++g)
-      for (int c = 0; c < D; ++c) {
-        const double* F = rows + (g * D + static_cast<std::size_t>(c)) * stride + at + k;
-        a[c] = _mm512_add_pd(a[c], _mm512_sub_pd(load(F), load(F + back[g])));
-      }
-    if (extra)
-      for (int c = 0; c < D; ++c) a[c] = _mm512_add_pd(a[c], load(extra[c] + k));
-    store_block_sums<D, Assign>(a, f + k * D, left);
+    const auto load = [&](const double* p) __attribute__((always_inline)) { return load_eight<Full>(lanes, p); };
+    // named sums, not an array (see assemble_block_grouped_avx512)
+    __m512d a0 = _mm512_setzero_pd(), a1 = _mm512_setzero_pd(), a2 = _mm512_setzero_pd();
+    for (std::size_t g = 0; g < groups; ++g) {
+      const double* F = rows + g * D * stride + at + k;
+      a0 = _mm512_add_pd(a0, _mm512_sub_pd(load(F), load(F + back[g])));
+      a1 = _mm512_add_pd(a1, _mm512_sub_pd(load(F + stride), load(F + stride + back[g])));
+      if constexpr (D == 3)
+        a2 = _mm512_add_pd(a2, _mm512_sub_pd(load(F + 2 * stride), load(F + 2 * stride + back[g])));
+    }
+    if (extra) {
+      a0 = _mm512_add_pd(a0, load(extra[0] + k));
+      a1 = _mm512_add_pd(a1, load(extra[1] + k));
+      if constexpr (D == 3) a2 = _mm512_add_pd(a2, load(extra[2] + k));
+    }
+    if constexpr (D == 3) {
+      const __m512d a[3] = {a0, a1, a2};
+      store_block_sums<D, Assign>(a, f + k * D, left);
+    } else {
+      const __m512d a[2] = {a0, a1};
+      store_block_sums<D, Assign>(a, f + k * D, left);
+    }
   });
 }
 
