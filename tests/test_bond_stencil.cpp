@@ -81,3 +81,82 @@ TEST(BondStencil, MergedOffsetsGiveTheForcesOfOneGroupPerOffset) {
   }
   omp_set_num_threads(omp_get_num_procs());
 }
+
+// A scene of several phases (the shipped inclusion: a (3,5) matrix, a (7,14) inclusion, a weaker (3,5)
+// interface) sweeps its bonds eight at a time with each lane's law looked up (sweep_laws_avx512 where the
+// machine has AVX-512); a law outside the paper's three exponent pairs sends every bond through the scalar
+// loop. Both are checked against a plain sum over the intact bonds, each with its own law's force.
+namespace {
+std::vector<double> plain_bond_forces(const std::vector<double>& x, const std::vector<int>& bi,
+                                      const std::vector<int>& bj, const std::vector<int>& blaw,
+                                      const std::vector<bool>& alive, const std::vector<PairLaw>& laws) {
+  std::vector<double> f(x.size(), 0.0);
+  for (std::size_t b = 0; b < bi.size(); ++b) {
+    if (!alive[b]) continue;
+    const std::size_t i = static_cast<std::size_t>(bi[b]), j = static_cast<std::size_t>(bj[b]);
+    const double d0 = x[2 * i] - x[2 * j], d1 = x[2 * i + 1] - x[2 * j + 1];
+    const double r = std::sqrt(d0 * d0 + d1 * d1);
+    const double fr = laws[static_cast<std::size_t>(blaw[b])].force(r) / r;
+    f[2 * i] += fr * d0, f[2 * i + 1] += fr * d1;
+    f[2 * j] -= fr * d0, f[2 * j + 1] -= fr * d1;
+  }
+  return f;
+}
+}  // namespace
+
+TEST(BondStencil, SeveralLawsGiveEachBondItsOwnLaw) {
+  const Scene sc = read_scene(test::case_path("inclusion.toml"));
+  const System sys = build_system(sc);
+  ASSERT_EQ(sys.laws.size(), 3u) << "matrix, inclusion, interface";
+  const std::size_t n = sys.size();
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> jitter(-0.02 * sys.r0, 0.02 * sys.r0);
+  std::vector<double> x(2 * n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int d = 0; d < 2; ++d) x[2 * i + static_cast<std::size_t>(d)] = sys.position[i][d] + jitter(rng);
+  std::vector<int> bi, bj, blaw;
+  int counts[3] = {0, 0, 0};
+  for (const auto& b : sys.bonds) {
+    bi.push_back(b[0]), bj.push_back(b[1]);
+    const auto& a = sys.phase_pair_law;
+    const std::size_t np = sys.phase_names.size();
+    blaw.push_back(a[static_cast<std::size_t>(sys.phase[static_cast<std::size_t>(b[0])]) * np +
+                     static_cast<std::size_t>(sys.phase[static_cast<std::size_t>(b[1])])]);
+    ++counts[blaw.back()];
+  }
+  for (int l = 0; l < 3; ++l) EXPECT_GT(counts[l], 50) << "law " << l << " has bonds";
+  std::bernoulli_distribution broken(0.1);
+  std::vector<bool> alive(bi.size(), true);
+  detail::BondStencil<2> stencil(n, bi, bj, blaw);
+  for (std::size_t b = 0; b < bi.size(); ++b)
+    if (broken(rng)) alive[b] = false, stencil.set_alive(b, false);
+  const double cut2 = sys.cutoff * sys.cutoff, inv_rmin = INFINITY;
+
+  const auto check = [&](const std::vector<PairLaw>& laws, bool vector_table) {
+    const detail::ManyLaws many(laws.data(), laws.size());
+    EXPECT_EQ(many.table, vector_table);
+    const std::vector<double> plain = plain_bond_forces(x, bi, bj, blaw, alive, laws);
+    double scale = 0.0;
+    for (double v : plain) scale = std::max(scale, std::abs(v));
+    ASSERT_GT(scale, 1e3) << "dyn: the jitter should load the bonds";
+    std::vector<double> first;
+    for (int threads : {1, 2}) {
+      omp_set_num_threads(threads);
+      std::vector<double> f(2 * n, 0.0);
+      EXPECT_EQ(stencil.add_forces(x.data(), f.data(), many, cut2, inv_rmin), 0);
+      double worst = 0.0;
+      for (std::size_t k = 0; k < 2 * n; ++k) worst = std::max(worst, std::abs(f[k] - plain[k]));
+      EXPECT_LT(worst, 1e-12 * scale) << threads << " thread(s)";
+      if (first.empty())
+        first = f;
+      else
+        EXPECT_EQ(std::memcmp(first.data(), f.data(), f.size() * sizeof(double)), 0) << "1 and 2 threads";
+    }
+    omp_set_num_threads(omp_get_num_procs());
+  };
+  check(sys.laws, true);
+  // the inclusion's law with another repulsive exponent: no table, the scalar loop
+  std::vector<PairLaw> odd = sys.laws;
+  odd[1].q = 12;
+  check(odd, false);
+}

@@ -52,10 +52,13 @@ constexpr double pow2(int k) {
   return r;
 }
 
-/// Whether G and H keep full precision once scaled for the sweep below (false only for absurd laws).
-template <int P, int Q>
-inline bool fixed_avx512_scales(double G, double H) {
-  return std::isnormal(G * pow2(-4 * (P + 1))) && std::isnormal(H * pow2(-4 * (Q + 1)));
+/// The sweeps' exact scalings of G and H (law_magnitude_avx512): 2^-4(p+1) and 2^-4(q+1).
+constexpr double fixed_law_G_scale(int p) { return pow2(-4 * (p + 1)); }
+constexpr double fixed_law_H_scale(int q) { return pow2(-4 * (q + 1)); }
+
+/// Whether G and H keep full precision once scaled for the sweeps (false only for absurd laws).
+inline bool fixed_law_scales_ok(int p, int q, double G, double H) {
+  return std::isnormal(G * fixed_law_G_scale(p)) && std::isnormal(H * fixed_law_H_scale(q));
 }
 
 /// The first min(left, 8) lanes.
@@ -82,16 +85,14 @@ inline __m512d load_eight(__mmask8 lanes, const double* p) {
 /// Bonds (i, i + o) for i in [0, m) of one offset: F[i] = F(r)/r (x_i - x_{i+o}) (zero for bonds gone or
 /// longer than sqrt(cut2)); returns the number of intact bonds found longer than sqrt(cut2). The pointers are at
 /// i = 0, which lies `lead` slots past a multiple of eight particles (x, F 64-byte aligned there). The loop runs
-/// on those aligned eights, the lanes outside [0, m) masked off.
-template <int D, int P, int Q>
-inline long sweep_fixed_avx512(const double* __restrict x0, const double* __restrict x1, const double* __restrict x2,
-                               std::size_t o, const std::uint8_t* __restrict alive, double* __restrict F0,
-                               double* __restrict F1, double* __restrict F2, std::size_t m, std::size_t lead,
-                               double G, double H, double cut2, double inv_rmin) {
-  static_assert(Q >= P, "the factored form needs q >= p");
-  // y carries a factor s = 16: ie^p (H ie^(q-p) - G) y = (s ie)^p (H s^-(q+1) (s ie)^(q-p) - G s^-(p+1)) (s y)
-  constexpr double sG = pow2(-4 * (P + 1)), sH = pow2(-4 * (Q + 1));  // exact scalings (fixed_avx512_scales)
-  const __m512d vG = _mm512_set1_pd(G * sG), vH = _mm512_set1_pd(H * sH);
+/// on those aligned eights, the lanes outside [0, m) masked off. The law comes from
+/// mag(i, ie, bonds, full): |F| (> 0 repulsive) from 16 ie (ie = min(1/r, 1/r_min)) for the lanes `bonds`,
+/// scaled as below.
+template <int D, class Mag>
+inline long sweep_avx512(const double* __restrict x0, const double* __restrict x1, const double* __restrict x2,
+                         std::size_t o, const std::uint8_t* __restrict alive, double* __restrict F0,
+                         double* __restrict F1, double* __restrict F2, std::size_t m, std::size_t lead, double cut2,
+                         double inv_rmin, Mag&& mag) {
   const __m512d vcut2 = _mm512_set1_pd(cut2), vrmin = _mm512_set1_pd(16.0 * inv_rmin);
   const __m512d three = _mm512_set1_pd(3.0), twelve = _mm512_set1_pd(12.0);
   long broke = 0;
@@ -115,9 +116,8 @@ inline long sweep_fixed_avx512(const double* __restrict x0, const double* __rest
     y = _mm512_mul_pd(y, _mm512_fnmadd_pd(rr, _mm512_mul_pd(y, y), three));   // 2 / r
     y = _mm512_mul_pd(y, _mm512_fnmadd_pd(rr, _mm512_mul_pd(y, y), twelve));  // 16 / r
     const __m512d ie = _mm512_min_pd(y, vrmin);  // force held constant inside r_min (Sec. 4.2)
-    const __m512d iep = pw<P>(ie);
-    const __m512d mag = _mm512_mul_pd(iep, _mm512_fmsub_pd(vH, pw<Q - P>(ie), vG));  // > 0 repulsive
-    const __m512d fr = _mm512_maskz_mov_pd(live & within, _mm512_mul_pd(mag, y));
+    const __mmask8 bonds = live & within;
+    const __m512d fr = _mm512_maskz_mov_pd(bonds, _mm512_mul_pd(mag(i, ie, bonds, full), y));
     if constexpr (Full) {
       _mm512_store_pd(F0 + i, _mm512_mul_pd(fr, d0));
       _mm512_store_pd(F1 + i, _mm512_mul_pd(fr, d1));
@@ -139,6 +139,60 @@ inline long sweep_fixed_avx512(const double* __restrict x0, const double* __rest
   for (; i + 8 <= end; i += 8) eight(i, __mmask8(0xff), std::true_type{});
   if (i < end) eight(i, __mmask8((1u << (end - i)) - 1u), std::false_type{});
   return broke;
+}
+
+/// The (p,q) law's |F| from s ie (s = 16, the sweep's scaled 1/r) with G and H scaled by fixed_law_scales:
+/// ie^p (H ie^(q-p) - G) y = (s ie)^p (H s^-(q+1) (s ie)^(q-p) - G s^-(p+1)) (s y), so the sweep's product with
+/// s y is F/r exactly as unscaled (powers of two).
+template <int P, int Q>
+inline __m512d law_magnitude_avx512(__m512d ie, __m512d G_scaled, __m512d H_scaled) {
+  static_assert(Q >= P, "the factored form needs q >= p");
+  return _mm512_mul_pd(pw<P>(ie), _mm512_fmsub_pd(H_scaled, pw<Q - P>(ie), G_scaled));  // > 0 repulsive
+}
+
+/// sweep_avx512 for one law of compile-time exponents.
+template <int D, int P, int Q>
+inline long sweep_fixed_avx512(const double* __restrict x0, const double* __restrict x1, const double* __restrict x2,
+                               std::size_t o, const std::uint8_t* __restrict alive, double* __restrict F0,
+                               double* __restrict F1, double* __restrict F2, std::size_t m, std::size_t lead,
+                               double G, double H, double cut2, double inv_rmin) {
+  const __m512d vG = _mm512_set1_pd(G * fixed_law_G_scale(P)), vH = _mm512_set1_pd(H * fixed_law_H_scale(Q));
+  return sweep_avx512<D>(x0, x1, x2, o, alive, F0, F1, F2, m, lead, cut2, inv_rmin,
+                         [&](std::ptrdiff_t, __m512d ie, __mmask8, auto) __attribute__((always_inline)) {
+                           return law_magnitude_avx512<P, Q>(ie, vG, vH);
+                         });
+}
+
+/// sweep_avx512 for bonds of several laws (a scene of several phases), each of the paper's three (p,q):
+/// bond i's law is ids[i], at most eight laws (ManyLaws' table: G and H scaled for the law's (p,q), and its
+/// family, 0 (3,5), 1 (5,10), 2 (7,14)). Each family present among the eight bonds is evaluated for its lanes,
+/// with the same arithmetic as sweep_fixed_avx512 gives a scene of that one law.
+template <int D>
+inline long sweep_laws_avx512(const double* __restrict x0, const double* __restrict x1, const double* __restrict x2,
+                              std::size_t o, const std::uint8_t* __restrict alive, const int* __restrict ids,
+                              double* __restrict F0, double* __restrict F1, double* __restrict F2, std::size_t m,
+                              std::size_t lead, const double* G_scaled, const double* H_scaled,
+                              const long long* family, double cut2, double inv_rmin) {
+  const __m512d tG = _mm512_loadu_pd(G_scaled), tH = _mm512_loadu_pd(H_scaled);
+  const __m512i tF = _mm512_loadu_si512(family);
+  return sweep_avx512<D>(
+      x0, x1, x2, o, alive, F0, F1, F2, m, lead, cut2, inv_rmin,
+      [&](std::ptrdiff_t i, __m512d ie, __mmask8 bonds, auto full) __attribute__((always_inline)) {
+        constexpr bool Full = decltype(full)::value;
+        const __m256i id8 = Full ? _mm256_loadu_si256(reinterpret_cast<const __m256i*>(ids + i))
+                                 : _mm256_maskz_loadu_epi32(bonds, ids + i);
+        const __m512i idx = _mm512_cvtepi32_epi64(id8);
+        const __m512d G = _mm512_permutexvar_pd(idx, tG), H = _mm512_permutexvar_pd(idx, tH);
+        const __m512i fam = _mm512_permutexvar_epi64(idx, tF);
+        __m512d out = _mm512_setzero_pd();
+        const __mmask8 f0 = _mm512_mask_cmpeq_epi64_mask(bonds, fam, _mm512_set1_epi64(0));
+        const __mmask8 f1 = _mm512_mask_cmpeq_epi64_mask(bonds, fam, _mm512_set1_epi64(1));
+        const __mmask8 f2 = _mm512_mask_cmpeq_epi64_mask(bonds, fam, _mm512_set1_epi64(2));
+        if (f0) out = _mm512_mask_mov_pd(out, f0, law_magnitude_avx512<3, 5>(ie, G, H));
+        if (f1) out = _mm512_mask_mov_pd(out, f1, law_magnitude_avx512<5, 10>(ie, G, H));
+        if (f2) out = _mm512_mask_mov_pd(out, f2, law_magnitude_avx512<7, 14>(ie, G, H));
+        return out;
+      });
 }
 
 /// f (N x D, interleaved) from particle k: f = 0 + a (Assign) or f + a, for the first min(left, 8) particles of

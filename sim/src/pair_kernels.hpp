@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <type_traits>
 #include <vector>
@@ -68,13 +69,35 @@ struct OneLaw {
 struct ManyLaws {
   const PairLaw* laws;
   const int* id;
+  /// For the AVX-512 bond sweep (sweep_laws_avx512), if every law is one of the paper's three (p,q) and there
+  /// are at most eight: per law, G 2^-4(p+1), H 2^-4(q+1) (exact scalings) and the family 0 (3,5), 1 (5,10),
+  /// 2 (7,14).
+  bool table = false;
+  std::array<double, 8> G_scaled{}, H_scaled{};
+  std::array<long long, 8> family{};
+
+  ManyLaws(const PairLaw* all, std::size_t n, const int* ids = nullptr) : laws(all), id(ids) {
+    table = n <= 8;
+    for (std::size_t l = 0; l < n && table; ++l) {
+      const PairLaw& law = all[l];
+      const int f = law.p == 3 && law.q == 5 ? 0 : law.p == 5 && law.q == 10 ? 1 : law.p == 7 && law.q == 14 ? 2 : -1;
+      G_scaled[l] = std::ldexp(law.G, -4 * (law.p + 1));
+      H_scaled[l] = std::ldexp(law.H, -4 * (law.q + 1));
+      family[l] = f;
+      table = f >= 0 && std::isnormal(G_scaled[l]) && std::isnormal(H_scaled[l]);
+    }
+  }
   template <class T = double>
   T magnitude(std::size_t u, T ie) const {
     const PairLaw& l = laws[id[u]];
     if constexpr (std::is_same_v<T, double>) return -l.G * ipow(ie, l.p) + l.H * ipow(ie, l.q);
     return -T(l.G) * ipow_t(ie, l.p) + T(l.H) * ipow_t(ie, l.q);
   }
-  ManyLaws with_ids(const int* ids) const { return ManyLaws{laws, ids}; }
+  ManyLaws with_ids(const int* ids) const {
+    ManyLaws m = *this;
+    m.id = ids;
+    return m;
+  }
 };
 
 /// Calls fn(evaluator) with the fastest evaluator that fits: a single law (compile-time exponents for the
@@ -88,7 +111,7 @@ auto with_law(const std::vector<PairLaw>& laws, bool single, Fn&& fn) {
     if (l.p == 3 && l.q == 5) return fn(FixedLaw<3, 5>{l.G, l.H});
     return fn(OneLaw{l});
   }
-  return fn(ManyLaws{laws.data(), nullptr});
+  return fn(ManyLaws(laws.data(), laws.size()));
 }
 
 /// Potential with the r_min clamp continued linearly (phi' = -F, F constant inside r_min).
