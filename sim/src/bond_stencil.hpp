@@ -428,7 +428,7 @@ class BondStencil {
     double* __restrict F2 = w.F_of(gi, D - 1) + shift;
 #ifdef PMFRAG_HAVE_AVX512_SWEEP
     if constexpr (std::is_same_v<Real, double> && is_fixed_law<Law>::value) {
-      if (fixed_law_scales_ok(Law::p, Law::q, law.G, law.H)) {
+      if (fixed_law_scales_ok<Law::p, Law::q>(law.G, law.H)) {
         broke += sweep_fixed_avx512<D, Law::p, Law::q>(x0, x1, x2, o, alive, F0, F1, F2, m, ub & 7, law.G,
                                                        law.H, cut2, inv_rmin);
         return;
