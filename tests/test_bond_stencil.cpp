@@ -17,6 +17,18 @@
 
 using namespace pmfrag;
 
+namespace {
+// The particles' positions (N x dim), each moved at random by up to 2 % of r0 so that every bond carries a force.
+std::vector<double> jittered(const System& sys, int dim, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> jitter(-0.02 * sys.r0, 0.02 * sys.r0);
+  const std::size_t d = static_cast<std::size_t>(dim);
+  std::vector<double> x(d * sys.size());
+  for (std::size_t i = 0; i < sys.size(); ++i)
+    for (std::size_t c = 0; c < d; ++c) x[d * i + c] = sys.position[i][static_cast<Eigen::Index>(c)] + jitter(rng);
+  return x;
+}
+}  // namespace
+
 TEST(BondStencil, MergedOffsetsGiveTheForcesOfOneGroupPerOffset) {
   // The paper's 3-D block without its slit (its 13 offsets; rings far larger than L2, so they merge), every
   // particle moved at random by up to 2 % of r0 so that each bond carries a real force.
@@ -24,10 +36,7 @@ TEST(BondStencil, MergedOffsetsGiveTheForcesOfOneGroupPerOffset) {
   System sys = build_system(sc);
   const std::size_t n = sys.size();
   std::mt19937_64 rng(11);
-  std::uniform_real_distribution<double> jitter(-0.02 * sys.r0, 0.02 * sys.r0);
-  std::vector<double> x(3 * n);
-  for (std::size_t i = 0; i < n; ++i)
-    for (int d = 0; d < 3; ++d) x[3 * i + static_cast<std::size_t>(d)] = sys.position[i][d] + jitter(rng);
+  const std::vector<double> x = jittered(sys, 3, rng);
   std::vector<int> bi, bj, blaw;
   for (const auto& b : sys.bonds) bi.push_back(b[0]), bj.push_back(b[1]), blaw.push_back(0);
   detail::BondStencil<3> merged(n, bi, bj, blaw), separate(n, bi, bj, blaw, false, false);
@@ -110,10 +119,7 @@ TEST(BondStencil, SeveralLawsGiveEachBondItsOwnLaw) {
   ASSERT_EQ(sys.laws.size(), 3u) << "matrix, inclusion, interface";
   const std::size_t n = sys.size();
   std::mt19937_64 rng(5);
-  std::uniform_real_distribution<double> jitter(-0.02 * sys.r0, 0.02 * sys.r0);
-  std::vector<double> x(2 * n);
-  for (std::size_t i = 0; i < n; ++i)
-    for (int d = 0; d < 2; ++d) x[2 * i + static_cast<std::size_t>(d)] = sys.position[i][d] + jitter(rng);
+  const std::vector<double> x = jittered(sys, 2, rng);
   std::vector<int> bi, bj, blaw;
   int counts[3] = {0, 0, 0};
   for (const auto& b : sys.bonds) {

@@ -245,6 +245,25 @@ inline void store_block_sums(const __m512d (&a)[D], double* fk, std::size_t left
   }
 }
 
+/// The assemblies' last step for eight particles from k: the block sums (a0, a1 and, in 3-D, a2) plus the
+/// off-stencil sums extra[c][k..] if given, into f (store_block_sums).
+template <int D, bool Assign, bool Full>
+[[gnu::always_inline]] inline void finish_eight(__m512d a0, __m512d a1, __m512d a2, const double (*extra)[256],
+                                                std::size_t k, __mmask8 lanes, double* f, std::size_t left) {
+  if (extra) {
+    a0 = _mm512_add_pd(a0, load_eight<Full>(lanes, extra[0] + k));
+    a1 = _mm512_add_pd(a1, load_eight<Full>(lanes, extra[1] + k));
+    if constexpr (D == 3) a2 = _mm512_add_pd(a2, load_eight<Full>(lanes, extra[2] + k));
+  }
+  if constexpr (D == 3) {
+    const __m512d a[3] = {a0, a1, a2};
+    store_block_sums<D, Assign>(a, f + k * D, left);
+  } else {
+    const __m512d a[2] = {a0, a1};
+    store_block_sums<D, Assign>(a, f + k * D, left);
+  }
+}
+
 /// The assembly of one block of len particles: f_i += sum over the offsets o_g of F_g[i] - F_g[i - o_g], then
 /// + extra[i] if given, f (N x D, interleaved) from the block's first particle. Assign: f_i = 0 + the sum
 /// instead (the same bits as adding to a zeroed f, without reading f). F_g's component c is the ring
@@ -273,18 +292,7 @@ inline void assemble_block_avx512(const double* rows, std::size_t at, std::size_
       if constexpr (D == 3)
         a2 = _mm512_add_pd(a2, _mm512_sub_pd(load(F + 2 * stride), load(F + 2 * stride + back[g])));
     }
-    if (extra) {
-      a0 = _mm512_add_pd(a0, load(extra[0] + k));
-      a1 = _mm512_add_pd(a1, load(extra[1] + k));
-      if constexpr (D == 3) a2 = _mm512_add_pd(a2, load(extra[2] + k));
-    }
-    if constexpr (D == 3) {
-      const __m512d a[3] = {a0, a1, a2};
-      store_block_sums<D, Assign>(a, f + k * D, left);
-    } else {
-      const __m512d a[2] = {a0, a1};
-      store_block_sums<D, Assign>(a, f + k * D, left);
-    }
+    finish_eight<D, Assign, Full>(a0, a1, a2, extra, k, lanes, f, left);
   });
 }
 
@@ -327,18 +335,15 @@ inline void assemble_block_four_avx512(const double* rows, std::size_t at, std::
       st.before = next;
       return _mm512_sub_pd(load_eight<Full>(lanes, st.F + k), back);
     };
-    __m512d a[2];
-    a[0] = _mm512_add_pd(_mm512_setzero_pd(), term(s00));
-    a[1] = _mm512_add_pd(_mm512_setzero_pd(), term(s01));
-    a[0] = _mm512_add_pd(a[0], term(s10));
-    a[1] = _mm512_add_pd(a[1], term(s11));
-    a[0] = _mm512_add_pd(a[0], term(s20));
-    a[1] = _mm512_add_pd(a[1], term(s21));
-    a[0] = _mm512_add_pd(a[0], term(s30));
-    a[1] = _mm512_add_pd(a[1], term(s31));
-    if (extra)
-      for (int c = 0; c < 2; ++c) a[c] = _mm512_add_pd(a[c], load_eight<Full>(lanes, extra[c] + k));
-    store_block_sums<2, Assign>(a, f + k * 2, left);
+    __m512d a0 = _mm512_add_pd(_mm512_setzero_pd(), term(s00));
+    __m512d a1 = _mm512_add_pd(_mm512_setzero_pd(), term(s01));
+    a0 = _mm512_add_pd(a0, term(s10));
+    a1 = _mm512_add_pd(a1, term(s11));
+    a0 = _mm512_add_pd(a0, term(s20));
+    a1 = _mm512_add_pd(a1, term(s21));
+    a0 = _mm512_add_pd(a0, term(s30));
+    a1 = _mm512_add_pd(a1, term(s31));
+    finish_eight<2, Assign, Full>(a0, a1, _mm512_setzero_pd(), extra, k, lanes, f, left);
   };
   std::size_t k = 0;
   for (; k + 8 <= len; k += 8) eight(k, std::true_type{});
@@ -404,18 +409,7 @@ inline void assemble_block_grouped_avx512(const double* rows, std::size_t at, st
         return v;
       });
     }
-    if (extra) {
-      a0 = _mm512_add_pd(a0, load(extra[0] + k));
-      a1 = _mm512_add_pd(a1, load(extra[1] + k));
-      if constexpr (D == 3) a2 = _mm512_add_pd(a2, load(extra[2] + k));
-    }
-    if constexpr (D == 3) {
-      const __m512d a[3] = {a0, a1, a2};
-      store_block_sums<D, Assign>(a, f + k * D, left);
-    } else {
-      const __m512d a[2] = {a0, a1};
-      store_block_sums<D, Assign>(a, f + k * D, left);
-    }
+    finish_eight<D, Assign, Full>(a0, a1, a2, extra, k, lanes, f, left);
   };
   std::size_t k = 0;
   for (; k + 8 <= len; k += 8) eight(k, std::true_type{});
