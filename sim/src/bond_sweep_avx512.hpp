@@ -1,6 +1,6 @@
 // The bond stencil's kernels in AVX-512: the sweep, eight bonds at a time for the paper's compile-time (p,q)
-// laws, and the block assembly (at the end). The scalar sweep spends most
-// of its time in one square root and one division per bond (both on the divider, ~2 ns per bond); here 1/r
+// laws (one law, or up to eight of them with each lane's looked up), and the block assemblies (at the end).
+// The scalar sweep spends most of its time in one square root and one division per bond (both on the divider, ~2 ns per bond); here 1/r
 // comes from the hardware estimate (rsqrt14, relative error < 2^-14) refined by two Newton steps
 // y <- y (3/2 - r^2 y^2 / 2), which reach double precision (error ~2^-52, against the correctly rounded
 // 1/sqrt). The steps are taken as y <- y (3 - r^2 y^2) and y <- y (12 - r^2 y^2), which carry y scaled by 2
