@@ -139,8 +139,9 @@ TEST(BondStencil, SeveralLawsGiveEachBondItsOwnLaw) {
   const double cut2 = sys.cutoff * sys.cutoff, inv_rmin = INFINITY;
 
   const auto check = [&](const std::vector<PairLaw>& laws, bool vector_table) {
-    const detail::ManyLaws many(laws.data(), laws.size());
-    EXPECT_EQ(many.table, vector_table);
+    const detail::LawTable table(laws);
+    const detail::ManyLaws many{laws.data(), nullptr, &table};
+    EXPECT_EQ(table.usable, vector_table);
     const std::vector<double> plain = plain_bond_forces(x, bi, bj, blaw, alive, laws);
     double scale = 0.0;
     for (double v : plain) scale = std::max(scale, std::abs(v));

@@ -435,9 +435,9 @@ class BondStencil {
       }
     }
     if constexpr (std::is_same_v<Real, double> && std::is_same_v<Law, ManyLaws>) {
-      if (law.table) {
-        broke += sweep_laws_avx512<D>(x0, x1, x2, o, alive, law.id + ub, F0, F1, F2, m, ub & 7, law.G_scaled.data(),
-                                      law.H_scaled.data(), law.family.data(), cut2, inv_rmin);
+      if (law.table->usable) {
+        broke += sweep_laws_avx512<D>(x0, x1, x2, o, alive, law.id + ub, F0, F1, F2, m, ub & 7, *law.table, cut2,
+                                      inv_rmin);
         return;
       }
     }

@@ -1,13 +1,14 @@
-// The bond stencil's kernels in AVX-512: the sweep, eight bonds at a time for the paper's compile-time (p,q)
-// laws (one law, or up to eight of them with each lane's looked up), and the block assemblies (at the end).
-// The scalar sweep spends most of its time in one square root and one division per bond (both on the divider, ~2 ns per bond); here 1/r
-// comes from the hardware estimate (rsqrt14, relative error < 2^-14) refined by two Newton steps
-// y <- y (3/2 - r^2 y^2 / 2), which reach double precision (error ~2^-52, against the correctly rounded
-// 1/sqrt). The steps are taken as y <- y (3 - r^2 y^2) and y <- y (12 - r^2 y^2), which carry y scaled by 2
-// and then by 16, exactly (powers of two); the scale is taken out of G and H once, so the 1/2 r^2 product
-// is saved. The law is F/r = ie^p (H ie^(q-p) - G) y, with ie = min(y, 1/r_min): one multiplication fewer
-// than H ie^q - G ie^p. 17 multiplications per eight bonds in 2-D; the sweep is bound by them. Every bond, including the last partial vector of a thread's range, goes through the same masked
-// vector arithmetic, so the result does not depend on how the range is split among threads.
+// The bond stencil's kernels in AVX-512: the sweep, eight bonds at a time for the paper's compile-time (p,q) laws
+// (one law, or up to eight of them with each lane's looked up), and the block assemblies (at the end). The scalar
+// sweep spends most of its time in one square root and one division per bond (both on the divider, ~2 ns per bond);
+// here 1/r comes from the hardware estimate (rsqrt14, relative error < 2^-14) refined by two Newton steps y <- y
+// (3/2 - r^2 y^2 / 2), which reach double precision (error ~2^-52, against the correctly rounded 1/sqrt). The steps
+// are taken as y <- y (3 - r^2 y^2) and y <- y (12 - r^2 y^2), which carry y scaled by 2 and then by 16, exactly
+// (powers of two); the scale is taken out of G and H once, so the 1/2 r^2 product is saved. The law is F/r = ie^p (H
+// ie^(q-p) - G) y, with ie = min(y, 1/r_min): one multiplication fewer than H ie^q - G ie^p. 17 multiplications per
+// eight bonds in 2-D; the sweep is bound by them. Every bond, including the last partial vector of a thread's range,
+// goes through the same masked vector arithmetic, so the result does not depend on how the range is split among
+// threads.
 #pragma once
 
 #include <cstddef>
@@ -72,7 +73,7 @@ inline __mmask8 first_lanes(std::size_t left) { return left >= 8 ? __mmask8(0xff
 /// load cost ~7 % of the sweep's time even with every lane set (measured: 9.4 against 10.1 time-stamp cycles
 /// per eight bonds), and a masked store cannot forward its data to the assembly's loads.
 template <class Body>
-inline void by_eight(std::size_t m, Body&& body) {
+[[gnu::always_inline]] inline void by_eight(std::size_t m, Body&& body) {
   std::size_t i = 0;
   for (; i + 8 <= m; i += 8) body(i, std::true_type{});
   if (i < m) body(i, std::false_type{});
@@ -167,18 +168,16 @@ inline long sweep_fixed_avx512(const double* __restrict x0, const double* __rest
                          });
 }
 
-/// sweep_avx512 for bonds of several laws (a scene of several phases), each of the paper's three (p,q):
-/// bond i's law is ids[i], at most eight laws (ManyLaws' table: G and H scaled for the law's (p,q), and its
-/// family, 0 (3,5), 1 (5,10), 2 (7,14)). Each family present among the eight bonds is evaluated for its lanes,
-/// with the same arithmetic as sweep_fixed_avx512 gives a scene of that one law.
+/// sweep_avx512 for bonds of several laws (a scene of several phases), each one of the paper's three (p,q):
+/// bond i's law is ids[i], its scaled G, H and family in `table` (LawTable, usable). Each family present among the
+/// eight bonds is evaluated for its lanes, with the arithmetic sweep_fixed_avx512 gives a scene of that one law.
 template <int D>
 inline long sweep_laws_avx512(const double* __restrict x0, const double* __restrict x1, const double* __restrict x2,
                               std::size_t o, const std::uint8_t* __restrict alive, const int* __restrict ids,
                               double* __restrict F0, double* __restrict F1, double* __restrict F2, std::size_t m,
-                              std::size_t lead, const double* G_scaled, const double* H_scaled,
-                              const long long* family, double cut2, double inv_rmin) {
-  const __m512d tG = _mm512_loadu_pd(G_scaled), tH = _mm512_loadu_pd(H_scaled);
-  const __m512i tF = _mm512_loadu_si512(family);
+                              std::size_t lead, const LawTable& table, double cut2, double inv_rmin) {
+  const __m512d tG = _mm512_loadu_pd(table.G_scaled.data()), tH = _mm512_loadu_pd(table.H_scaled.data());
+  const __m512i tF = _mm512_loadu_si512(table.family.data());
   return sweep_avx512<D>(
       x0, x1, x2, o, alive, F0, F1, F2, m, lead, cut2, inv_rmin,
       [&](std::ptrdiff_t i, __m512d ie, __mmask8 bonds, auto full) __attribute__((always_inline)) {
@@ -189,12 +188,14 @@ inline long sweep_laws_avx512(const double* __restrict x0, const double* __restr
         const __m512d G = _mm512_permutexvar_pd(idx, tG), H = _mm512_permutexvar_pd(idx, tH);
         const __m512i fam = _mm512_permutexvar_epi64(idx, tF);
         __m512d out = _mm512_setzero_pd();
-        const __mmask8 f0 = _mm512_mask_cmpeq_epi64_mask(bonds, fam, _mm512_set1_epi64(0));
-        const __mmask8 f1 = _mm512_mask_cmpeq_epi64_mask(bonds, fam, _mm512_set1_epi64(1));
-        const __mmask8 f2 = _mm512_mask_cmpeq_epi64_mask(bonds, fam, _mm512_set1_epi64(2));
-        if (f0) out = _mm512_mask_mov_pd(out, f0, law_magnitude_avx512<3, 5>(ie, G, H));
-        if (f1) out = _mm512_mask_mov_pd(out, f1, law_magnitude_avx512<5, 10>(ie, G, H));
-        if (f2) out = _mm512_mask_mov_pd(out, f2, law_magnitude_avx512<7, 14>(ie, G, H));
+        const auto family = [&](auto f) __attribute__((always_inline)) {  // f: the family, a compile-time index
+          constexpr int P = paper_pq[decltype(f)::value][0], Q = paper_pq[decltype(f)::value][1];
+          const __mmask8 lanes = _mm512_mask_cmpeq_epi64_mask(bonds, fam, _mm512_set1_epi64(decltype(f)::value));
+          if (lanes) out = _mm512_mask_mov_pd(out, lanes, law_magnitude_avx512<P, Q>(ie, G, H));
+        };
+        family(std::integral_constant<int, 0>{});
+        family(std::integral_constant<int, 1>{});
+        family(std::integral_constant<int, 2>{});
         return out;
       });
 }
@@ -345,9 +346,7 @@ inline void assemble_block_four_avx512(const double* rows, std::size_t at, std::
     a1 = _mm512_add_pd(a1, term(s31));
     finish_eight<2, Assign, Full>(a0, a1, _mm512_setzero_pd(), extra, k, lanes, f, left);
   };
-  std::size_t k = 0;
-  for (; k + 8 <= len; k += 8) eight(k, std::true_type{});
-  if (k < len) eight(k, std::false_type{});
+  by_eight(len, eight);
 }
 
 /// assemble_block_avx512 for groups of several offsets: f_i += sum over the groups g of F_g[i] - F_g[i - o] for each
@@ -411,9 +410,7 @@ inline void assemble_block_grouped_avx512(const double* rows, std::size_t at, st
     }
     finish_eight<D, Assign, Full>(a0, a1, a2, extra, k, lanes, f, left);
   };
-  std::size_t k = 0;
-  for (; k + 8 <= len; k += 8) eight(k, std::true_type{});
-  if (k < len) eight(k, std::false_type{});
+  by_eight(len, eight);
 }
 
 }  // namespace pmfrag::detail

@@ -33,6 +33,7 @@ class PairEffect final : public Effect<D> {
 
   PairEffect(const System& sys, const PairSpec& spec) : spec_(spec) {
     laws_ = sys.laws;
+    law_table_ = detail::LawTable(laws_);
     phase_ = sys.phase;
     nphase_ = sys.phase_names.size();
     pair_law_ = sys.phase_pair_law;
@@ -89,7 +90,7 @@ class PairEffect final : public Effect<D> {
   // after the guard has accepted the step.
   void add_fused_forces(State<D>& s) override {
     const double cut2 = cutoff_ * cutoff_;
-    broke_ = detail::with_law(laws_, nphase_ == 1, [&](const auto& law) {
+    broke_ = detail::with_law(laws_, law_table_, nphase_ == 1, [&](const auto& law) {
       return stencil_.add_forces(s.x.front().data(), s.f.front().data(), law, cut2, inv_rmin_);
     });
   }
@@ -100,7 +101,7 @@ class PairEffect final : public Effect<D> {
     // cutoff: these forces come first and set f (stage::assigns_forces), so with no pair f is zero
     if (spec_.model == PairModel::cutoff && list_.size() == 0) std::fill(s.f.begin(), s.f.end(), V::Zero());
     if (uses_list_ && list_.size() > 0) {
-      detail::with_law(laws_, nphase_ == 1, [&](const auto& law) {
+      detail::with_law(laws_, law_table_, nphase_ == 1, [&](const auto& law) {
         if (spec_.model == PairModel::cutoff)  // the Verlet list of a lattice is a stencil too
           return list_stencil_.add_forces(s.x.front().data(), s.f.front().data(), law, cut2, inv_rmin_);
         contact_kernel(s, law.with_ids(list_.law.data()));
@@ -146,7 +147,7 @@ class PairEffect final : public Effect<D> {
   }
   long resident_forces(State<D>& s, const double* x, int tid) override {
     const double cut2 = cutoff_ * cutoff_;
-    return detail::with_law(laws_, nphase_ == 1, [&](const auto& law) {
+    return detail::with_law(laws_, law_table_, nphase_ == 1, [&](const auto& law) {
       if (spec_.model == PairModel::cutoff) {  // a pair beyond D adds zero: nothing to settle
         list_stencil_.add_forces_of(tid, x, s.f.front().data(), law, cut2, inv_rmin_);
         return 0L;
@@ -518,6 +519,7 @@ class PairEffect final : public Effect<D> {
 
   PairSpec spec_;
   std::vector<PairLaw> laws_;
+  detail::LawTable law_table_;  ///< laws_ for the vector sweep of several laws
   std::vector<int> phase_, pair_law_;
   std::size_t nphase_ = 1, n_ = 0;
   double cutoff_ = 0.0, inv_rmin_ = 0.0, r_min_ = 0.0, max_reach_ = 0.0, r0_ = 0.0;

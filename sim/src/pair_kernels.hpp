@@ -66,44 +66,49 @@ struct OneLaw {
   }
   OneLaw with_ids(const int*) const { return *this; }
 };
-struct ManyLaws {
-  const PairLaw* laws;
-  const int* id;
-  /// For the AVX-512 bond sweep (sweep_laws_avx512), if every law is one of the paper's three (p,q) and there
-  /// are at most eight: per law, G 2^-4(p+1), H 2^-4(q+1) (exact scalings) and the family 0 (3,5), 1 (5,10),
-  /// 2 (7,14).
-  bool table = false;
+/// The paper's three (p,q) laws; a law's family in LawTable is its index here.
+inline constexpr int paper_pq[3][2] = {{3, 5}, {5, 10}, {7, 14}};
+
+/// What the AVX-512 sweep of several laws (sweep_laws_avx512) needs of them, built once per set of laws:
+/// usable if there are at most eight and each is one of paper_pq; per law G 2^-4(p+1) and H 2^-4(q+1) (the
+/// sweeps' exact scalings, kept normal) and its family.
+struct LawTable {
+  bool usable = false;
   std::array<double, 8> G_scaled{}, H_scaled{};
   std::array<long long, 8> family{};
 
-  ManyLaws(const PairLaw* all, std::size_t n, const int* ids = nullptr) : laws(all), id(ids) {
-    table = n <= 8;
-    for (std::size_t l = 0; l < n && table; ++l) {
-      const PairLaw& law = all[l];
-      const int f = law.p == 3 && law.q == 5 ? 0 : law.p == 5 && law.q == 10 ? 1 : law.p == 7 && law.q == 14 ? 2 : -1;
+  LawTable() = default;
+  explicit LawTable(const std::vector<PairLaw>& laws) {
+    usable = laws.size() <= 8;
+    for (std::size_t l = 0; l < laws.size() && usable; ++l) {
+      const PairLaw& law = laws[l];
+      family[l] = -1;
+      for (long long f = 0; f < 3; ++f)
+        if (law.p == paper_pq[f][0] && law.q == paper_pq[f][1]) family[l] = f;
       G_scaled[l] = std::ldexp(law.G, -4 * (law.p + 1));
       H_scaled[l] = std::ldexp(law.H, -4 * (law.q + 1));
-      family[l] = f;
-      table = f >= 0 && std::isnormal(G_scaled[l]) && std::isnormal(H_scaled[l]);
+      usable = family[l] >= 0 && std::isnormal(G_scaled[l]) && std::isnormal(H_scaled[l]);
     }
   }
+};
+
+struct ManyLaws {
+  const PairLaw* laws;
+  const int* id;
+  const LawTable* table;  ///< for the vector sweep
   template <class T = double>
   T magnitude(std::size_t u, T ie) const {
     const PairLaw& l = laws[id[u]];
     if constexpr (std::is_same_v<T, double>) return -l.G * ipow(ie, l.p) + l.H * ipow(ie, l.q);
     return -T(l.G) * ipow_t(ie, l.p) + T(l.H) * ipow_t(ie, l.q);
   }
-  ManyLaws with_ids(const int* ids) const {
-    ManyLaws m = *this;
-    m.id = ids;
-    return m;
-  }
+  ManyLaws with_ids(const int* ids) const { return ManyLaws{laws, ids, table}; }
 };
 
 /// Calls fn(evaluator) with the fastest evaluator that fits: a single law (compile-time exponents for the
-/// paper's (3,5), (5,10), (7,14)) or a per-pair law lookup.
+/// paper's (3,5), (5,10), (7,14)) or a per-pair law lookup (`table`: LawTable(laws)).
 template <class Fn>
-auto with_law(const std::vector<PairLaw>& laws, bool single, Fn&& fn) {
+auto with_law(const std::vector<PairLaw>& laws, const LawTable& table, bool single, Fn&& fn) {
   if (single) {
     const PairLaw& l = laws.front();
     if (l.p == 7 && l.q == 14) return fn(FixedLaw<7, 14>{l.G, l.H});
@@ -111,7 +116,7 @@ auto with_law(const std::vector<PairLaw>& laws, bool single, Fn&& fn) {
     if (l.p == 3 && l.q == 5) return fn(FixedLaw<3, 5>{l.G, l.H});
     return fn(OneLaw{l});
   }
-  return fn(ManyLaws(laws.data(), laws.size()));
+  return fn(ManyLaws{laws.data(), nullptr, &table});
 }
 
 /// Potential with the r_min clamp continued linearly (phi' = -F, F constant inside r_min).
