@@ -498,8 +498,8 @@ class BondStencil {
       for (int c = 0; c < D; ++c) extra[c][p - static_cast<std::size_t>(b0)] = sum[c];
     }
     double* __restrict fb = f + static_cast<std::size_t>(b0) * D;
-    const std::size_t lane0 = static_cast<std::size_t>(b0) / 8;  // b0 is a multiple of 8
 #ifdef PMFRAG_HAVE_AVX512_SWEEP
+    const std::size_t lane0 = static_cast<std::size_t>(b0) / 8;  // b0 is a multiple of 8
     static_assert(block == 256, "the AVX-512 assemblies take blocks of at most 256");
     const double(*ex)[256] = any_extra ? extra : nullptr;
     if (merged_) {  // a branch per group and eight particles: the plate ran 0.84x when it went this way too
