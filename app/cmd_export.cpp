@@ -14,7 +14,7 @@ namespace pmfrag::app {
 namespace {
 
 struct ExportCli {
-  std::string dir, fields, criterion = "D", compress = "lz4";
+  std::string dir, fields, criterion, compress = "lz4";
   long every = 1;
 };
 
@@ -25,7 +25,7 @@ void run(const ExportCli& o) {
                     : o.compress == "none" ? analysis::Compression::none
                                            : analysis::Compression::lz4;
   try {
-    opt.criterion = analysis::BreakCriterion::parse(o.criterion);
+    opt.criterion = analysis::BreakCriterion::parse_option(o.criterion);
   } catch (const std::invalid_argument& e) {
     throw UsageError(e.what());
   }
@@ -53,7 +53,9 @@ void add_export_command(CLI::App& app) {
   std::string names;
   for (const auto& f : analysis::export_fields()) names += (names.empty() ? "" : ", ") + f;
   cmd->add_option("--fields", o->fields, "Comma-separated arrays to write (default all): " + names)->type_name("A,B,...");
-  cmd->add_option("--break", o->criterion, "When a bond counts as broken: D (default), rd, or a factor of r0")
+  cmd->add_option("--break", o->criterion,
+                  "Read broken bonds from their lengths at the frames: longer than D, rd, or a factor of r0 (default: "
+                  "the engine's record of the bonds it broke)")
       ->type_name("D|rd|FACTOR");
   cmd->add_option("--compress", o->compress,
                   "Compression of the VTU data: lz4 (default, fastest to write), zlib (about 25 % smaller), none")

@@ -14,13 +14,13 @@ namespace {
 
 struct FragmentsCli {
   std::string dir;
-  std::string criterion = "D";
+  std::string criterion;  ///< "": the engine's record
 };
 
 void run(const FragmentsCli& o) {
-  analysis::BreakCriterion c;
+  std::optional<analysis::BreakCriterion> c;
   try {
-    c = analysis::BreakCriterion::parse(o.criterion);
+    c = analysis::BreakCriterion::parse_option(o.criterion);
   } catch (const std::invalid_argument& e) {
     throw UsageError(e.what());
   }
@@ -31,8 +31,8 @@ void run(const FragmentsCli& o) {
   const auto& end = rep.timeline.back();
   long singles = 0;
   for (const auto& g : rep.final_fragments) singles += g.particles == 1;
-  std::printf("fragments of %s: (p,q) = (%d,%d), a bond breaks when %s (%.4g cm), %ld frames%s\n", o.dir.c_str(), rep.p,
-              rep.q, rep.criterion.c_str(), rep.threshold_cm, rep.frames_read, rep.partial ? " (PARTIAL)" : "");
+  std::printf("fragments of %s: (p,q) = (%d,%d), broken bonds: %s; %ld frames%s\n", o.dir.c_str(), rep.p, rep.q,
+              rep.criterion.c_str(), rep.frames_read, rep.partial ? " (PARTIAL)" : "");
   if (rep.onset_time >= 0)
     std::printf("  onset (first broken bond, frame resolution): %.4e s\n", rep.onset_time);
   else
@@ -41,6 +41,9 @@ void run(const FragmentsCli& o) {
     std::printf("  separation (>= 2 fragments of >= 5 %% mass): %.4e s\n", rep.separation_time);
   else
     std::printf("  no separation into pieces of >= 5 %% of the mass\n");
+  if (end.broken_engine >= 0 && end.broken_engine != end.broken)
+    std::printf("  note: the engine counted %ld bonds broken or beyond D at t = %.4e s, this reading %ld\n",
+                end.broken_engine, end.time, end.broken);
   std::printf("  at t = %.4e s: %ld broken bonds, %ld fragments (%ld of >= 2 particles, %ld single particles, %ld of >= 1 %% "
               "mass), largest %.1f %% of the mass\n",
               end.time, end.broken, end.fragments, end.fragments - singles, singles, end.fragments_1pct,
@@ -56,8 +59,8 @@ void add_fragments_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("fragments", "Cluster broken bonds into fragments (timeline, final fragments, sizes)");
   cmd->add_option("run_dir", o->dir, "Run folder (holds trajectory.h5)")->required();
   cmd->add_option("--break", o->criterion,
-                  "When a bond counts as broken: D (longer than the interaction distance, default), rd (longer "
-                  "than the damage spacing) or a factor of r0, e.g. 1.5")
+                  "Read broken bonds from their lengths at the frames instead of the engine's record (the default): "
+                  "D (longer than the interaction distance), rd (the damage spacing) or a factor of r0, e.g. 1.5")
       ->type_name("D|rd|FACTOR");
   cmd->callback([o] { run(*o); });
 }

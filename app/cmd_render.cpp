@@ -140,12 +140,19 @@ void run(const RenderCli& o) {
   }
   const auto species = rd.species();
   const double r0 = rd.parameter("r0");
-  analysis::FragmentTracker tracker(rd.particles(), rd.bonds(), rd.mass(), dim, rd.parameter("cutoff"));
+  // Broken bonds as the engine recorded them (older trajectories: longer than D at a frame).
+  analysis::BondStates states = analysis::BondStates::open(rd, std::nullopt);
+  const analysis::FragmentTracker tracker(rd.particles(), rd.bonds(), rd.mass());
   // Only the leading frames that read back whole (a cut file, a frame failing its checksum): the sequence is
   // then marked partial, on the terminal and in frames/PARTIAL.txt.
   long frames = rd.frames();
   std::string damage = rd.damage();
   for (long k = 0; k < frames; ++k) {
+    if (!states.covers(k)) {
+      damage += std::string(damage.empty() ? "" : "; ") + states.damage();
+      frames = k;
+      break;
+    }
     try {
       (void)rd.frame(k);
     } catch (const std::exception& e) {
@@ -190,10 +197,11 @@ void run(const RenderCli& o) {
     spec.min = 0.0;
     spec.max = o.field == "damage" ? 1.0 : 0.0;
     if (o.field != "damage") {
-      analysis::FragmentTracker probe(rd.particles(), rd.bonds(), rd.mass(), dim, rd.parameter("cutoff"));
+      analysis::BondStates probe = analysis::BondStates::open(rd, std::nullopt);
       for (long k = 0; k < frames; ++k) {
         const auto f = rd.frame(k);
-        const auto v = field_values(o.field, f, first, probe.update(f.position), species, dim);
+        probe.advance(k, f.position);
+        const auto v = field_values(o.field, f, first, tracker.label(probe.broken()), species, dim);
         spec.max = std::max(spec.max, *std::max_element(v.begin(), v.end()));
       }
     }
@@ -238,7 +246,7 @@ void run(const RenderCli& o) {
   std::vector<render::FramePicture> panel(panel_frames.size());
   const auto bond_list = rd.bonds();
   Overlay overlay;
-  if (o.bonds) overlay.bonds = &bond_list, overlay.broken = &tracker.broken();
+  if (o.bonds) overlay.bonds = &bond_list, overlay.broken = &states.broken();
   overlay.r0 = r0;
   overlay.vector_scale = o.vectors;
   const auto t0 = std::chrono::steady_clock::now();
@@ -246,7 +254,8 @@ void run(const RenderCli& o) {
   render::PngQueue png_queue;  // frames are encoded while the next one renders
   for (long k = 0; k < frames; ++k) {
     const auto f = rd.frame(k);
-    const auto lab = tracker.update(f.position);  // every frame: breakage is history-dependent
+    states.advance(k, f.position);  // every frame: the distance reading is history-dependent
+    const auto lab = tracker.label(states.broken());
     const bool want_frame = !o.no_frames && (k % o.every == 0 || k == frames - 1);
     const bool in_panel = std::find(panel_frames.begin(), panel_frames.end(), k) != panel_frames.end();
     if (!want_frame && !in_panel) continue;

@@ -76,10 +76,20 @@ void run(const RunCli& o) {
   std::printf("%s: %ld steps, %ld frames, %zu particles in %.3g s (%.3g particle-steps/s, %d threads)\n",
               r.completed ? "finished" : "STOPPED", r.steps, r.frames, r.particles, r.wall_s, r.particle_steps_per_s(),
               r.threads());
-  if (r.first_break_time >= 0)
-    std::printf("first broken bond at t = %.6e s\n", r.first_break_time);
-  else
-    std::printf("no bond broke\n");
+  // What happened to the bonds, in the words of the model that ran.
+  if (r.pair_model == "cutoff") {
+    if (r.bonds_broken > 0)
+      std::printf("cutoff model: pairs of the lattice left D %ld times (the first at t = %.6e s) and came back within D "
+                  "%ld times; %ld are beyond D at the end\n",
+                  r.bonds_broken, r.first_break_time, r.bonds_re_formed, r.bonds_beyond_now);
+    else
+      std::printf("cutoff model: no pair of the lattice left D\n");
+  } else if (r.pair_model == "bonded") {
+    if (r.bonds_broken > 0)
+      std::printf("first broken bond at t = %.6e s; %ld bonds broken\n", r.first_break_time, r.bonds_broken);
+    else
+      std::printf("no bond broke\n");
+  }
   std::printf("trajectory: %s/trajectory.h5\n", ro.out_dir.c_str());
   if (r.interrupted) {
     std::fprintf(stderr, "pmfrag: %s\n", r.message.c_str());

@@ -23,7 +23,7 @@ for delay in 0.02 0.$((RANDOM % 4 + 2)); do
     h5ls -r "$work/cut/trajectory.h5" > /dev/null || { echo "FAIL: killed trajectory unreadable"; fail=1; }
     "$pmfrag" run --resume "$work/cut" -q > /dev/null || { echo "FAIL: resume"; fail=1; }
   fi
-  for obj in /particles/all/position /particles/all/velocity /observables; do
+  for obj in /particles/all/position /particles/all/velocity /observables /connectivity; do
     if ! h5diff -q "$work/whole/trajectory.h5" "$work/cut/trajectory.h5" "$obj" "$obj"; then
       echo "FAIL: $obj differs after resume (delay $delay)"; fail=1
     fi
@@ -44,7 +44,7 @@ else
   grep -q '"interrupted": true' "$work/int/run.json" || { echo "FAIL: run.json does not say interrupted"; fail=1; }
   h5ls -r "$work/int/trajectory.h5" > /dev/null || { echo "FAIL: interrupted trajectory unreadable"; fail=1; }
   "$pmfrag" run --resume "$work/int" -q > /dev/null || { echo "FAIL: resume after SIGINT"; fail=1; }
-  for obj in /particles/all/position /particles/all/velocity /observables; do
+  for obj in /particles/all/position /particles/all/velocity /observables /connectivity; do
     h5diff -q "$work/whole/trajectory.h5" "$work/int/trajectory.h5" "$obj" "$obj" || { echo "FAIL: $obj differs after SIGINT + resume"; fail=1; }
   done
   echo "SIGINT: exit 130, checkpoint, resumed identically"
@@ -60,7 +60,7 @@ if [ -f "$work/acut/trajectory.h5" ]; then
 else
   "$pmfrag" run "$scene" --out "$work/acut" -q "${adaptive[@]}" > /dev/null || { echo "FAIL: adaptive rerun"; fail=1; }
 fi
-for obj in /particles/all/position /particles/all/velocity /observables; do
+for obj in /particles/all/position /particles/all/velocity /observables /connectivity; do
   h5diff -q "$work/awhole/trajectory.h5" "$work/acut/trajectory.h5" "$obj" "$obj" || { echo "FAIL: $obj differs after adaptive resume"; fail=1; }
 done
 echo "adaptive: $(grep -o '"steps": [0-9]*' "$work/awhole/run.json"), resumed identically"
@@ -72,6 +72,10 @@ plate="$src/cases/slit_plate_7_14.toml"
 t0=$(date +%s.%N)
 "$pmfrag" run "$plate" --out "$work/cwhole" -q --threads 1 "${cutoff[@]}" > /dev/null || exit 1
 wall=$(awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN { print b - a }')
+# the bond record compared below must hold something: pairs of the lattice that left D (and came back)
+rows=$(/usr/bin/python3 -c "import h5py; print(len(h5py.File('$work/cwhole/trajectory.h5', 'r')['connectivity/broken_bonds/step']))")
+[ "$rows" -gt 0 ] || { echo "FAIL: the cutoff plate's bond record is empty"; fail=1; }
+echo "cutoff plate: $rows rows in the bond record"
 for sig in INT KILL; do
   rm -rf "$work/ccut"
   same=1
@@ -82,7 +86,7 @@ for sig in INT KILL; do
   else
     "$pmfrag" run "$plate" --out "$work/ccut" -q --threads 1 "${cutoff[@]}" > /dev/null || { echo "FAIL: cutoff rerun"; fail=1; }
   fi
-  for obj in /particles/all/position /particles/all/velocity /observables; do
+  for obj in /particles/all/position /particles/all/velocity /observables /connectivity; do
     h5diff -q "$work/cwhole/trajectory.h5" "$work/ccut/trajectory.h5" "$obj" "$obj" || { echo "FAIL: $obj differs after cutoff resume ($sig after ${delay}s)"; fail=1; same=0; }
   done
   [ $same -eq 1 ] && echo "cutoff plate: SIG$sig after ${delay}s of ${wall}s, resumed identically"

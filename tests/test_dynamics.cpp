@@ -419,6 +419,9 @@ void expect_resident_steps_bitwise_plain(const Scene& sc, long steps, const std:
   const auto want = flat(plain);
   const BondView<2> broke = bond_view(*plain.effects().front());
   check(broke);
+  std::vector<BondEvent> want_events;
+  take_bond_events<2>(*plain.effects().front(), want_events);
+  EXPECT_EQ(static_cast<long>(want_events.size()), broke.broke + broke.re_formed);
   omp_set_num_threads(2);
   const std::vector<std::vector<double>> changing = {{1.0, 3.0}, {3.0, 1.0}, {1.0, 1.0}, {2.0, 1.0}};
   for (const std::vector<double>& weights : {std::vector<double>{}, std::vector<double>{1.0, 3.0}, std::vector<double>{0.0}}) {
@@ -437,6 +440,10 @@ void expect_resident_steps_bitwise_plain(const Scene& sc, long steps, const std:
     EXPECT_EQ(std::memcmp(got.data(), want.data(), got.size() * sizeof(double)), 0) << weights.size() << " weights";
     EXPECT_EQ(bond_view(*lf.effects().front()).first_break_step, broke.first_break_step);
     EXPECT_EQ(bond_view(*lf.effects().front()).list_builds, broke.list_builds);
+    std::vector<BondEvent> events;
+    take_bond_events<2>(*lf.effects().front(), events);
+    EXPECT_TRUE(events == want_events) << "the record of bond events: " << events.size() << " against "
+                                       << want_events.size() << " (" << weights.size() << " weights)";
   }
   set_thread_weights({});
   set_min_particles_per_thread(0);
@@ -464,7 +471,77 @@ TEST(Dynamics, ResidentStepsOfTheCutoffReadingAreBitwiseThePlainOnes) {
                                    "kinematic.1.velocity=[0.0, -2000.0]"});
   expect_resident_steps_bitwise_plain(cutoff, 3000, [](const BondView<2>& v) {
     ASSERT_GT(v.list_builds, 10) << "the test needs the Verlet list to be rebuilt";
+    ASSERT_GT(v.broke, 0) << "the test needs pairs of the lattice to leave D";
   });
+}
+
+namespace {
+// Steps sc one at a time on one thread and, after every step, tests every original bond's length against D:
+// the pair effect's record must hold exactly the changes seen (bond, step, direction), and its state the
+// bonds within D (cutoff) or intact (bonded). Returns the events.
+std::vector<BondEvent> expect_record_is_every_change(const Scene& sc, long steps) {
+  const System sys = build_system(sc);
+  const bool cutoff = sc.pair->model == PairModel::cutoff;
+  omp_set_num_threads(1);
+  auto lf = test::make_leapfrog<2>(sys, sc, choose_step(sc, sys).dt);
+  const double cut2 = sys.cutoff * sys.cutoff;
+  std::vector<std::uint8_t> within(sys.bonds.size(), 1);
+  std::vector<BondEvent> want, got;
+  auto seen = [&] {
+    const auto& x = lf.state().x;
+    for (std::size_t b = 0; b < sys.bonds.size(); ++b) {
+      const auto d = x[static_cast<std::size_t>(sys.bonds[b][0])] - x[static_cast<std::size_t>(sys.bonds[b][1])];
+      const bool in = d[0] * d[0] + d[1] * d[1] <= cut2;
+      if (in == static_cast<bool>(within[b]) || (!cutoff && !within[b])) continue;  // bonded: broken for good
+      within[b] = in;
+      want.push_back({lf.state().step, lf.state().time(), static_cast<long>(b), in});
+    }
+  };
+  seen();
+  for (long k = 0; k < steps; ++k) {
+    lf.step();
+    seen();
+  }
+  take_bond_events<2>(*lf.effects().front(), got);
+  const BondView<2> v = bond_view(*lf.effects().front());
+  EXPECT_TRUE(*v.alive == within) << "the engine's bond state against the lengths";
+  EXPECT_EQ(got.size(), want.size());
+  for (std::size_t k = 0; k < std::min(got.size(), want.size()); ++k)
+    if (!(got[k] == want[k])) {
+      ADD_FAILURE() << "event " << k << ": engine (step " << got[k].step << ", bond " << got[k].bond << ", re_formed "
+                    << got[k].re_formed << "), lengths (step " << want[k].step << ", bond " << want[k].bond
+                    << ", re_formed " << want[k].re_formed << ")";
+      break;
+    }
+  omp_set_num_threads(omp_get_num_procs());
+  return got;
+}
+}  // namespace
+
+TEST(BondRecord, CutoffModelRecordsEveryCrossingOfDAtItsStep) {
+  // The cutoff model tests only bonds near D each step (pair.cpp, record_crossings); the (3,5) cutoff plate
+  // collapses near its slit tips from ~3.6e-3 s, and pulled 100x faster the (7,14) plate tears: pairs leave D
+  // and come back within it, and every change must be recorded at the step the lengths show it.
+  const Scene collapse = read_scene(test::case_path("slit_plate_3_5.toml"), {"pair.model=\"cutoff\""});
+  const auto a = expect_record_is_every_change(collapse, test::scaled(45000));
+  const Scene torn = read_scene(test::case_path("slit_plate_7_14.toml"),
+                                {"pair.model=\"cutoff\"", "kinematic.0.velocity=[0.0, 2000.0]",
+                                 "kinematic.1.velocity=[0.0, -2000.0]"});
+  const auto b = expect_record_is_every_change(torn, 3000);
+  long again = 0;
+  for (const auto& e : a) again += e.re_formed;
+  for (const auto& e : b) again += e.re_formed;
+  std::printf("cutoff (3,5) collapse: %zu events; (7,14) torn: %zu events; %ld of them re-forming\n", a.size(), b.size(), again);
+  EXPECT_GT(b.size(), 0u);
+  EXPECT_GT(again, 0) << "the test needs pairs that come back within D";
+}
+
+TEST(BondRecord, BondedModelRecordsEachBrokenBondOnce) {
+  const Scene torn = read_scene(test::case_path("slit_plate_7_14.toml"),
+                                {"kinematic.0.velocity=[0.0, 2000.0]", "kinematic.1.velocity=[0.0, -2000.0]"});
+  const auto events = expect_record_is_every_change(torn, 3000);
+  EXPECT_GT(events.size(), 0u);
+  for (const auto& e : events) EXPECT_FALSE(e.re_formed);
 }
 
 TEST(Dynamics, MeasuredThreadCountLeavesTheTrajectoryBitwiseUnchanged) {

@@ -69,13 +69,15 @@ every = 1e-5
   }
   EXPECT_EQ(listed, res.frames_written);
 
-  analysis::FragmentTracker tracker(rd.particles(), rd.bonds(), rd.mass(), 2, rd.parameter("cutoff"));
+  analysis::BondStates states = analysis::BondStates::open(rd, std::nullopt);
+  const analysis::FragmentTracker tracker(rd.particles(), rd.bonds(), rd.mass());
   const auto first = rd.frame(0);
   const auto bonds = rd.bonds();
   long max_fragments = 0;
   for (long k = 0; k < frames; ++k) {
     const auto f = rd.frame(k);
-    const auto lab = tracker.update(f.position);
+    states.advance(k, f.position);
+    const auto lab = tracker.label(states.broken());
     if (k % 2 != 0 && k != frames - 1) continue;
     char name[32];
     std::snprintf(name, sizeof name, "frame_%05ld.vtu", k);
@@ -107,7 +109,7 @@ every = 1e-5
       max_fragments = std::max(max_fragments, static_cast<long>(fid->GetComponent(i, 0)) + 1);
     }
     for (vtkIdType b = 0; b < m; ++b) {
-      ASSERT_EQ(brk->GetComponent(n + b, 0), tracker.broken()[static_cast<std::size_t>(b)]);
+      ASSERT_EQ(brk->GetComponent(n + b, 0), states.broken()[static_cast<std::size_t>(b)]);
       const auto& bd = bonds[static_cast<std::size_t>(b)];
       const double r = std::hypot(f.position[2 * bd[0]] - f.position[2 * bd[1]], f.position[2 * bd[0] + 1] - f.position[2 * bd[1] + 1]);
       ASSERT_NEAR(str->GetComponent(n + b, 0), r / r0, 1e-12);

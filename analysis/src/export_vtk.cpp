@@ -209,12 +209,18 @@ ExportResult export_vtk(const std::string& run_dir, const ExportOptions& opt) {
   st.laws = rd.laws();
   st.pair_law = rd.phase_pair_law();
   st.nphase = static_cast<std::size_t>(std::lround(std::sqrt(static_cast<double>(st.pair_law.size()))));
-  FragmentTracker tracker(st.n, st.bonds, st.mass, st.dim, break_length(rd, opt.criterion));
+  BondStates states = BondStates::open(rd, opt.criterion);
+  FragmentTracker tracker(st.n, st.bonds, st.mass);
   fs::create_directories(dir / "vtk");
   std::vector<std::pair<double, std::string>> written;
   TrajectoryFrame first;
   const long frames = rd.frames();
   for (long k = 0; k < frames; ++k) {
+    if (!states.covers(k)) {  // a record cut short: no bond state for the frames after it
+      res.partial = true;
+      res.note += std::string(res.note.empty() ? "" : "; ") + states.damage() + "; exported frames before it";
+      break;
+    }
     TrajectoryFrame f;
     try {
       f = rd.frame(k);
@@ -225,12 +231,13 @@ ExportResult export_vtk(const std::string& run_dir, const ExportOptions& opt) {
       break;
     }
     if (k == 0) first = f;
-    const FrameLabels lab = tracker.update(f.position);  // every frame: breakage is history-dependent
+    states.advance(k, f.position);  // every frame: the distance reading is history-dependent
+    const FrameLabels lab = tracker.label(states.broken());
     ++res.frames_read;
     if (k % opt.every != 0 && k != frames - 1) continue;
     char name[32];
     std::snprintf(name, sizeof name, "frame_%05ld.vtu", k);
-    write_frame(dir / "vtk" / name, st, f, first, lab, tracker.broken(), opt.fields, opt.compression);
+    write_frame(dir / "vtk" / name, st, f, first, lab, states.broken(), opt.fields, opt.compression);
     written.emplace_back(f.time, std::string("vtk/") + name);
     ++res.frames_written;
   }

@@ -32,6 +32,11 @@ BreakCriterion BreakCriterion::parse(const std::string& text) {
   return c;
 }
 
+std::optional<BreakCriterion> BreakCriterion::parse_option(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  return parse(text);
+}
+
 std::string BreakCriterion::describe() const {
   switch (kind) {
     case Kind::cutoff: return "longer than D";
@@ -45,27 +50,69 @@ std::string BreakCriterion::describe() const {
   return "?";
 }
 
-FragmentTracker::FragmentTracker(std::size_t particles, std::vector<std::array<int, 2>> bonds, std::vector<double> mass,
-                                 int dim, double threshold_cm)
-    : n_(particles), bonds_(std::move(bonds)), mass_(std::move(mass)), dim_(dim), threshold2_(threshold_cm * threshold_cm) {
+BondStates::BondStates(std::vector<std::array<int, 2>> bonds, int dim, double threshold_cm)
+    : bonds_(std::move(bonds)), dim_(dim), threshold_(threshold_cm) {
   broken_.assign(bonds_.size(), 0);
+  char b[96];
+  std::snprintf(b, sizeof b, "longer than %.4g cm at a frame (distance reading)", threshold_cm);
+  describe_ = b;
 }
 
-FrameLabels FragmentTracker::update(const std::vector<double>& x) {
+BondStates::BondStates(std::size_t bonds, BondRecord record) : record_(std::move(record)) {
+  broken_.assign(bonds, 0);
+  describe_ = record_->model == "cutoff" ? "beyond D, as the engine recorded (cutoff model: a pair back within D is intact)"
+                                         : "broken in the simulation, as the engine recorded";
+}
+
+BondStates BondStates::open(const H5mdReader& rd, const std::optional<BreakCriterion>& distance) {
+  if (!distance && rd.has_bond_record()) {
+    BondStates s(rd.bonds().size(), rd.bond_record());
+    s.threshold_ = rd.parameter("cutoff");
+    return s;
+  }
+  const BreakCriterion c = distance.value_or(BreakCriterion{});
+  BondStates s(rd.bonds(), rd.dim(), break_length(rd, c));
+  s.describe_ = c.describe() + " at a frame (distance reading)";
+  return s;
+}
+
+bool BondStates::covers(long frame) const {
+  return !record_ || (frame >= 0 && static_cast<std::size_t>(frame) < record_->rows_at_frame.size());
+}
+
+void BondStates::advance(long frame, const std::vector<double>& x) {
+  if (record_) {
+    if (!covers(frame)) throw std::logic_error("BondStates: the record does not reach frame " + std::to_string(frame));
+    const std::size_t until = static_cast<std::size_t>(record_->rows_at_frame[static_cast<std::size_t>(frame)]);
+    for (; applied_ < until; ++applied_) {
+      const BondEvent& e = record_->events[applied_];
+      std::uint8_t& b = broken_[static_cast<std::size_t>(e.bond)];
+      count_ += (e.re_formed ? 0 : 1) - b;  // (the reader checked that each row changes the state)
+      b = !e.re_formed;
+    }
+    return;
+  }
   const std::size_t d = static_cast<std::size_t>(dim_);
+  const double threshold2 = threshold_ * threshold_;
   for (std::size_t b = 0; b < bonds_.size(); ++b) {
     if (broken_[b]) continue;  // irreversible: a bond that re-closes stays broken
     const std::size_t i = static_cast<std::size_t>(bonds_[b][0]) * d, j = static_cast<std::size_t>(bonds_[b][1]) * d;
     double r2 = 0.0;
     for (std::size_t c = 0; c < d; ++c) r2 += (x[i + c] - x[j + c]) * (x[i + c] - x[j + c]);
-    if (r2 > threshold2_) broken_[b] = 1, ++count_;
+    if (r2 > threshold2) broken_[b] = 1, ++count_;
   }
+}
+
+FragmentTracker::FragmentTracker(std::size_t particles, std::vector<std::array<int, 2>> bonds, std::vector<double> mass)
+    : n_(particles), bonds_(std::move(bonds)), mass_(std::move(mass)) {}
+
+FrameLabels FragmentTracker::label(const std::vector<std::uint8_t>& broken) const {
   UnionFind uf(n_);
   std::vector<int> degree(n_, 0), lost(n_, 0);
   for (std::size_t b = 0; b < bonds_.size(); ++b) {
     const auto i = static_cast<std::size_t>(bonds_[b][0]), j = static_cast<std::size_t>(bonds_[b][1]);
     ++degree[i], ++degree[j];
-    if (broken_[b])
+    if (broken[b])
       ++lost[i], ++lost[j];
     else
       uf.unite(i, j);
@@ -172,28 +219,37 @@ std::string json_escaped(const std::string& text) {
 }
 }  // namespace
 
-FragmentReport analyse_fragments(const std::string& trajectory, const BreakCriterion& criterion) {
+FragmentReport analyse_fragments(const std::string& trajectory, const std::optional<BreakCriterion>& distance) {
   H5mdReader rd(trajectory);
   FragmentReport rep;
   if (!rd.damage().empty()) rep.partial = true, rep.note = "trajectory " + rd.damage();
-  rep.threshold_cm = break_length(rd, criterion);
+  BondStates states = BondStates::open(rd, distance);
+  rep.bond_state = states.source();
+  rep.threshold_cm = states.threshold_cm();
   const auto laws = rd.laws();
   if (laws.size() == 1) rep.p = laws.front().p, rep.q = laws.front().q;  // several phases: no single (p,q)
-  rep.criterion = criterion.describe();
+  rep.criterion = states.describe();
   const auto mass = rd.mass();
   for (double m : mass) rep.total_mass += m;
-  std::vector<double> ke, pe;
+  std::vector<double> ke, pe, engine;
   try {
     ke = rd.observable("kinetic_energy");
     pe = rd.observable("potential_energy");
+    engine = rd.observable("pairs_beyond_cutoff");
   } catch (const std::exception&) {
   }
   const auto bonds = rd.bonds();
-  FragmentTracker tracker(rd.particles(), bonds, mass, rd.dim(), rep.threshold_cm);
+  FragmentTracker tracker(rd.particles(), bonds, mass);
   std::vector<double> x_initial;
   FrameLabels labels;
   TrajectoryFrame last;
   for (long k = 0; k < rd.frames(); ++k) {
+    if (!states.covers(k)) {  // a record cut short: the frames after it have no known bond state
+      rep.partial = true;
+      rep.note += std::string(rep.note.empty() ? "" : "; ") + states.damage() + "; analysed frames 0.." +
+                  std::to_string(k - 1);
+      break;
+    }
     TrajectoryFrame f;
     try {
       f = rd.frame(k);
@@ -203,13 +259,15 @@ FragmentReport analyse_fragments(const std::string& trajectory, const BreakCrite
                   "); analysed frames 0.." + std::to_string(k - 1);
       break;
     }
-    labels = tracker.update(f.position);
+    states.advance(k, f.position);
+    labels = tracker.label(states.broken());
     TimelineRow row;
     row.step = f.step;
     row.time = f.time;
-    row.broken = tracker.broken_count();
+    row.broken = states.broken_count();
+    if (static_cast<std::size_t>(k) < engine.size()) row.broken_engine = std::lround(engine[static_cast<std::size_t>(k)]);
     if (k == 0) x_initial = f.position;
-    row.crack = crack_extent(x_initial, rd.dim(), bonds, tracker.broken());
+    row.crack = crack_extent(x_initial, rd.dim(), bonds, states.broken());
     std::map<int, double> fm;
     for (std::size_t i = 0; i < mass.size(); ++i) fm[labels.fragment_id[i]] += mass[i];
     std::map<int, long> fn;
@@ -240,11 +298,13 @@ void write_fragment_report(const FragmentReport& r, const std::string& dir_name)
   namespace fs = std::filesystem;
   const fs::path dir(dir_name);
   write_atomically(dir / "fragments_timeline.csv", [&](std::ostream& o) {
-    o << "time_s,step,broken_bonds,fragments,fragments_2plus,fragments_1pct_mass,largest_mass_fraction,"
-         "mean_fragment_mass_g,kinetic_energy_erg,potential_energy_erg,crack_tip_a_x_cm,crack_tip_a_y_cm,"
-         "crack_tip_a_z_cm,crack_tip_b_x_cm,crack_tip_b_y_cm,crack_tip_b_z_cm,crack_extent_cm\n";
+    o << "time_s,step,broken_bonds,broken_bonds_engine,fragments,fragments_2plus,fragments_1pct_mass,"
+         "largest_mass_fraction,mean_fragment_mass_g,kinetic_energy_erg,potential_energy_erg,crack_tip_a_x_cm,"
+         "crack_tip_a_y_cm,crack_tip_a_z_cm,crack_tip_b_x_cm,crack_tip_b_y_cm,crack_tip_b_z_cm,crack_extent_cm\n";
     for (const auto& t : r.timeline) {
-      o << t.time << "," << t.step << "," << t.broken << "," << t.fragments << "," << t.fragments_2plus << ","
+      o << t.time << "," << t.step << "," << t.broken << ",";
+      if (t.broken_engine >= 0) o << t.broken_engine;
+      o << "," << t.fragments << "," << t.fragments_2plus << ","
         << t.fragments_1pct << "," << t.largest_fraction << "," << t.mean_mass << "," << t.kinetic << "," << t.potential;
       if (t.crack.present)
         o << "," << t.crack.tip_a.x() << "," << t.crack.tip_a.y() << "," << t.crack.tip_a.z() << "," << t.crack.tip_b.x()
@@ -282,11 +342,13 @@ void write_fragment_report(const FragmentReport& r, const std::string& dir_name)
   for (const auto& g : r.final_fragments) (g.particles == 1 ? singles : multi) += 1;
   const TimelineRow& end = r.timeline.back();
   write_atomically(dir / "summary.json", [&](std::ostream& o) {
-    o << "{\n  \"p\": " << r.p << ",\n  \"q\": " << r.q << ",\n  \"break_criterion\": \"" << r.criterion
+    o << "{\n  \"p\": " << r.p << ",\n  \"q\": " << r.q << ",\n  \"bond_state\": \"" << r.bond_state
+      << "\",\n  \"break_criterion\": \"" << r.criterion
       << "\",\n  \"break_length_cm\": " << r.threshold_cm << ",\n  \"frames\": " << r.frames_read
       << ",\n  \"partial\": " << (r.partial ? "true" : "false") << ",\n  \"note\": \"" << json_escaped(r.note)
       << "\",\n  \"onset_time_s\": " << r.onset_time << ",\n  \"separation_time_s\": " << r.separation_time
       << ",\n  \"final_time_s\": " << end.time << ",\n  \"broken_bonds\": " << end.broken
+      << ",\n  \"broken_bonds_engine\": " << (end.broken_engine >= 0 ? std::to_string(end.broken_engine) : "null")
       << ",\n  \"fragments\": " << end.fragments << ",\n  \"fragments_2plus\": " << multi
       << ",\n  \"single_particles\": " << singles << ",\n  \"fragments_1pct_mass\": " << end.fragments_1pct
       << ",\n  \"largest_mass_fraction\": " << end.largest_fraction << "\n}\n";

@@ -140,6 +140,32 @@ struct Series {
   }
 };
 
+// The bond record: one row per event, in columns that grow together. Rows are few against particles (events
+// are sparse), so they go in chunks of many rows, rewritten in place as they fill (unfiltered, like the
+// scalar series).
+constexpr hsize_t event_chunk = 1024;
+const char* const event_columns[] = {"step", "time", "bond", "re_formed"};
+
+hid_t grow_rows(hid_t g, const char* name, hid_t t) {
+  hsize_t dims[1] = {0}, maxd[1] = {H5S_UNLIMITED}, chunk[1] = {event_chunk};
+  hid_t space = H5Screate_simple(1, dims, maxd);
+  hid_t plist = H5Pcreate(H5P_DATASET_CREATE);
+  H5Pset_chunk(plist, 1, chunk);
+  hid_t d = checked(H5Dcreate2(g, name, t, space, H5P_DEFAULT, plist, H5P_DEFAULT), name);
+  H5Pclose(plist), H5Sclose(space);
+  return d;
+}
+
+void append_rows(hid_t d, hsize_t at, hsize_t count, hid_t t, const void* data) {
+  hsize_t dims[1] = {at + count}, start[1] = {at}, n[1] = {count};
+  check(H5Dset_extent(d, dims), "extend bond record");
+  hid_t fspace = H5Dget_space(d);
+  H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start, nullptr, n, nullptr);
+  hid_t mspace = H5Screate_simple(1, n, nullptr);
+  check(H5Dwrite(d, t, mspace, fspace, H5P_DEFAULT, data), "write bond record");
+  H5Sclose(mspace), H5Sclose(fspace);
+}
+
 void write_law(hid_t g, const PairLaw& law, double mass) {
   scalar_dataset(g, "p", law.p);
   scalar_dataset(g, "q", law.q);
@@ -157,6 +183,9 @@ const char* const observable_names[] = {"kinetic_energy", "potential_energy", "t
 struct H5mdWriter::Impl {
   hid_t file = -1;
   hid_t particles = -1;
+  hid_t record = -1;                        ///< /connectivity/broken_bonds
+  hid_t columns[4] = {-1, -1, -1, -1};      ///< its step, time, bond, re_formed
+  Series rows_at_frame;                     ///< per frame: rows of the record up to that frame's step
   Series position, velocity;
   std::map<std::string, Series> observables;
   hid_t obs_group = -1;
@@ -221,6 +250,22 @@ H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& 
     string_attribute(d, "particles_group", "/particles/all");
     H5Dclose(d);
   }
+  {
+    const std::string model = scene.pair ? (scene.pair->model == PairModel::bonded ? "bonded" : "cutoff") : "none";
+    m.record = make_group(conn, "broken_bonds");
+    string_attribute(m.record, "model", model);
+    string_attribute(m.record, "description",
+                     model == "cutoff" ? "each time a bond of /connectivity/bonds leaves D (re_formed = 0) or comes back "
+                                         "within D (re_formed = 1), at the first step showing it"
+                                       : "each bond of /connectivity/bonds that broke (longer than D, for good), at the "
+                                         "first step showing it");
+    m.columns[0] = grow_rows(m.record, "step", H5T_NATIVE_LONG);
+    m.columns[1] = grow_rows(m.record, "time", H5T_NATIVE_DOUBLE);
+    string_attribute(m.columns[1], "unit", "s");
+    m.columns[2] = grow_rows(m.record, "bond", H5T_NATIVE_LONG);
+    m.columns[3] = grow_rows(m.record, "re_formed", H5T_NATIVE_INT8);
+    m.rows_at_frame = Series(m.record, "rows_at_frame", {}, H5T_NATIVE_LONG);
+  }
   H5Gclose(conn);
 
   m.obs_group = make_group(m.file, "observables");
@@ -271,11 +316,23 @@ H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& 
   if (std::rename(part.c_str(), path.c_str()) != 0) throw std::runtime_error(path + ": cannot rename from " + part);
 }
 
-H5mdWriter::H5mdWriter(const std::string& path, long keep_frames) : impl_(std::make_unique<Impl>()) {
+H5mdWriter::H5mdWriter(const std::string& path, long keep_frames, long keep_events) : impl_(std::make_unique<Impl>()) {
   auto& m = *impl_;
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // a missing record is reported below, without HDF5's stack
   m.file = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
   if (m.file < 0) throw std::runtime_error(path + ": cannot reopen trajectory to resume");
   const hsize_t keep = static_cast<hsize_t>(keep_frames);
+  m.record = H5Gopen2(m.file, "/connectivity/broken_bonds", H5P_DEFAULT);
+  if (m.record < 0)
+    throw std::runtime_error(path + ": has no /connectivity/broken_bonds (written by an older pmfrag): cannot resume; "
+                             "run the scene again with --force");
+  for (int c = 0; c < 4; ++c) {
+    m.columns[c] = checked(H5Dopen2(m.record, event_columns[c], H5P_DEFAULT), event_columns[c]);
+    hsize_t dims[1] = {static_cast<hsize_t>(keep_events)};
+    check(H5Dset_extent(m.columns[c], dims), "truncate bond record");
+  }
+  m.rows_at_frame = Series::reopen(m.record, "rows_at_frame", H5T_NATIVE_LONG, keep);
+  events_ = keep_events;
   m.particles = checked(H5Gopen2(m.file, "/particles/all", H5P_DEFAULT), "particles");
   m.position = Series::reopen(m.particles, "position", H5T_NATIVE_DOUBLE, keep);
   m.velocity = Series::reopen(m.particles, "velocity", H5T_NATIVE_DOUBLE, keep);
@@ -308,9 +365,28 @@ void H5mdWriter::write_frame(long step, double time, const std::vector<double>& 
   m.observables["bond_break_energy"].append(k, step, time, &obs.bond_break_energy);
   m.observables["energy_balance"].append(k, step, time, &balance);
   m.observables["pairs_beyond_cutoff"].append(k, step, time, &beyond);
+  m.rows_at_frame.append(k, step, time, &events_);
   ++frames_;
-  check(H5Fflush(m.file, H5F_SCOPE_GLOBAL), "flush");
+  flush();
 }
+
+void H5mdWriter::append_bond_events(const std::vector<BondEvent>& events) {
+  if (events.empty()) return;
+  auto& m = *impl_;
+  const hsize_t n = events.size(), at = static_cast<hsize_t>(events_);
+  std::vector<long> step(n), bond(n);
+  std::vector<double> time(n);
+  std::vector<std::int8_t> re_formed(n);
+  for (std::size_t k = 0; k < n; ++k)
+    step[k] = events[k].step, time[k] = events[k].time, bond[k] = events[k].bond, re_formed[k] = events[k].re_formed;
+  append_rows(m.columns[0], at, n, H5T_NATIVE_LONG, step.data());
+  append_rows(m.columns[1], at, n, H5T_NATIVE_DOUBLE, time.data());
+  append_rows(m.columns[2], at, n, H5T_NATIVE_LONG, bond.data());
+  append_rows(m.columns[3], at, n, H5T_NATIVE_INT8, re_formed.data());
+  events_ += static_cast<long>(n);
+}
+
+void H5mdWriter::flush() { check(H5Fflush(impl_->file, H5F_SCOPE_GLOBAL), "flush"); }
 
 void H5mdWriter::close() {
   if (!impl_ || impl_->file < 0) return;
@@ -318,6 +394,10 @@ void H5mdWriter::close() {
   m.position.close();
   m.velocity.close();
   for (auto& [name, s] : m.observables) s.close();
+  m.rows_at_frame.close();
+  for (hid_t& c : m.columns)
+    if (c >= 0) H5Dclose(c), c = -1;
+  if (m.record >= 0) H5Gclose(m.record);
   H5Gclose(m.obs_group);
   H5Gclose(m.particles);
   H5Fclose(m.file);
@@ -386,7 +466,7 @@ bool chunk_before(hid_t file, const char* path, hsize_t index, std::uint64_t lim
 }
 }  // namespace
 
-H5mdReader::H5mdReader(const std::string& path) {
+H5mdReader::H5mdReader(const std::string& path) : path_(path) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // we report missing objects ourselves
   file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   std::uint64_t limit = 0;
@@ -435,6 +515,7 @@ H5mdReader::H5mdReader(const std::string& path) {
     damage_ += "; " + std::to_string(ok) + " of " + std::to_string(frames_) + " frames lie before the cut";
     frames_ = ok;
   }
+  limit_ = limit;
 }
 
 H5mdReader::~H5mdReader() {
@@ -479,6 +560,106 @@ std::vector<std::array<int, 2>> H5mdReader::bonds() const {
   for (std::size_t k = 0; k < b.size(); ++k) b[k] = {flat[2 * k], flat[2 * k + 1]};
   return b;
 }
+bool H5mdReader::has_bond_record() const {
+  return H5Lexists(file_, "/connectivity", H5P_DEFAULT) > 0 &&
+         H5Lexists(file_, "/connectivity/broken_bonds", H5P_DEFAULT) > 0;
+}
+
+namespace {
+// Leading entries [0, n) of a chunked 1-D dataset whose chunks lie wholly before `limit` (a truncated file).
+hsize_t entries_before(hid_t file, const char* path, hsize_t n, std::uint64_t limit) {
+  hid_t d = H5Dopen2(file, path, H5P_DEFAULT);
+  if (d < 0) return 0;
+  hid_t dcpl = H5Dget_create_plist(d);
+  hsize_t chunk[1] = {1};
+  H5Pget_chunk(dcpl, 1, chunk);
+  H5Pclose(dcpl);
+  H5Dclose(d);
+  for (hsize_t at = 0; at < n; at += chunk[0])
+    if (!chunk_before(file, path, at, limit)) return at;
+  return n;
+}
+
+std::string string_attribute_of(hid_t obj, const char* name) {
+  if (H5Aexists(obj, name) <= 0) return "";
+  hid_t a = H5Aopen(obj, name, H5P_DEFAULT);
+  hid_t type = H5Aget_type(a);
+  std::string out;
+  if (H5Tis_variable_str(type) > 0) {
+    char* text = nullptr;
+    hid_t mem = H5Tcopy(H5T_C_S1);
+    H5Tset_size(mem, H5T_VARIABLE);
+    if (H5Aread(a, mem, &text) >= 0 && text) out = text;
+    if (text) H5free_memory(text);
+    H5Tclose(mem);
+  } else {
+    out.assign(H5Tget_size(type), '\0');
+    H5Aread(a, type, out.data());
+    while (!out.empty() && out.back() == '\0') out.pop_back();
+  }
+  H5Tclose(type), H5Aclose(a);
+  return out;
+}
+}  // namespace
+
+BondRecord H5mdReader::bond_record() const {
+  if (!has_bond_record()) throw std::runtime_error(path_ + ": has no /connectivity/broken_bonds");
+  BondRecord r;
+  {
+    hid_t g = H5Gopen2(file_, "/connectivity/broken_bonds", H5P_DEFAULT);
+    r.model = string_attribute_of(g, "model");
+    H5Gclose(g);
+  }
+  const std::string base = "/connectivity/broken_bonds/";
+  const auto step = read_all<long>(file_, base + "step");
+  const auto time = read_all<double>(file_, base + "time");
+  const auto bond = read_all<long>(file_, base + "bond");
+  const auto re_formed = read_all<int>(file_, base + "re_formed");
+  auto rows = read_all<long>(file_, base + "rows_at_frame/value");
+  hsize_t n = std::min({step.size(), time.size(), bond.size(), re_formed.size()});
+  hsize_t frames = std::min<hsize_t>(rows.size(), static_cast<hsize_t>(frames_));
+  frames = std::min<hsize_t>(frames, read_all<long>(file_, base + "rows_at_frame/step").size());
+  if (limit_ > 0) {
+    for (const char* c : event_columns) n = entries_before(file_, (base + c).c_str(), n, limit_);
+    frames = entries_before(file_, (base + "rows_at_frame/value").c_str(), frames, limit_);
+  }
+  rows.resize(frames);
+  // a frame counts only if every row it needs was read
+  std::size_t whole = 0;
+  while (whole < rows.size() && rows[whole] >= 0 && static_cast<hsize_t>(rows[whole]) <= n &&
+         (whole == 0 || rows[whole] >= rows[whole - 1]))
+    ++whole;
+  if (whole < static_cast<std::size_t>(frames_))
+    r.damage = "bond record covers frames 0.." + std::to_string(static_cast<long>(whole) - 1) + " of " +
+               std::to_string(frames_) + (limit_ > 0 ? " (file cut short)" : " (record cut short: a killed run?)");
+  rows.resize(whole);
+  r.rows_at_frame = rows;
+  const long used = rows.empty() ? 0 : rows.back();
+  const long nbonds = static_cast<long>(read_all<int>(file_, "/connectivity/bonds").size() / 2);
+  std::vector<std::uint8_t> broken(static_cast<std::size_t>(nbonds), 0);
+  const bool cutoff = r.model == "cutoff";
+  r.events.resize(static_cast<std::size_t>(used));
+  for (long k = 0; k < used; ++k) {
+    const std::size_t u = static_cast<std::size_t>(k);
+    const auto bad = [&](const std::string& what) {
+      return std::runtime_error(path_ + ": " + base + what + " (row " + std::to_string(k) + ")");
+    };
+    if (bond[u] < 0 || bond[u] >= nbonds)
+      throw bad("bond names bond " + std::to_string(bond[u]) + ", but /connectivity/bonds has " + std::to_string(nbonds) +
+                " rows");
+    if (k > 0 && step[u] < step[u - 1]) throw bad("step goes back from " + std::to_string(step[u - 1]) + " to " + std::to_string(step[u]));
+    const bool again = re_formed[u] != 0;
+    std::uint8_t& b = broken[static_cast<std::size_t>(bond[u])];
+    if ((again && (!cutoff || !b)) || (!again && b))
+      throw bad("re_formed: bond " + std::to_string(bond[u]) + (again ? " re-forms without having broken"
+                                                                      : " breaks again without having re-formed") +
+                (cutoff ? "" : " (a bonded run's bonds break once)"));
+    b = !again;
+    r.events[u] = BondEvent{step[u], time[u], bond[u], again};
+  }
+  return r;
+}
+
 std::vector<int> H5mdReader::species() const { return read_all<int>(file_, "/particles/all/species"); }
 std::vector<double> H5mdReader::mass() const { return read_all<double>(file_, "/particles/all/mass"); }
 std::vector<double> H5mdReader::observable(const std::string& name) const {
@@ -516,6 +697,7 @@ void write_checkpoint(const std::string& path, const Checkpoint& c) {
   if (f < 0) throw std::runtime_error(tmp + ": cannot write checkpoint");
   array_dataset<long>(f, "step", {c.step}, {});
   array_dataset<long>(f, "frames", {c.frames}, {});
+  array_dataset<long>(f, "bond_events", {c.bond_events}, {});
   array_dataset(f, "time_dt_level_calm", std::vector<double>{c.time, c.dt, double(c.level), double(c.calm)}, {4});
   array_dataset(f, "position", c.position, {c.position.size()});
   array_dataset(f, "velocity", c.velocity, {c.velocity.size()});
@@ -532,6 +714,10 @@ Checkpoint read_checkpoint(const std::string& path) {
   try {
     c.step = read_all<long>(f, "step").at(0);
     c.frames = read_all<long>(f, "frames").at(0);
+    if (H5Lexists(f, "bond_events", H5P_DEFAULT) <= 0)
+      throw std::runtime_error(path + ": written by an older pmfrag (no bond record): cannot resume; run the scene "
+                               "again with --force");
+    c.bond_events = read_all<long>(f, "bond_events").at(0);
     const auto td = read_all<double>(f, "time_dt_level_calm");
     c.time = td.at(0), c.dt = td.at(1), c.level = static_cast<int>(td.at(2)), c.calm = static_cast<int>(td.at(3));
     c.position = read_all<double>(f, "position");

@@ -59,6 +59,7 @@ class PairEffect final : public Effect<D> {
         m = std::min({m, sys.phase_mass[a], sys.phase_mass[b]});
       }
     uses_list_ = spec_.model == PairModel::cutoff || spec_.contact;
+    window_ = 0.05 * r0_;
   }
 
   std::string name() const override { return spec_.model == PairModel::bonded ? "pair (bonded)" : "pair (cutoff)"; }
@@ -83,6 +84,7 @@ class PairEffect final : public Effect<D> {
   }
   void canonicalize(const State<D>& s) override {
     if (uses_list_) rebuild(s);
+    far_margin_ = -1.0;  // the next crossing test is a full pass, in a resumed run as in this one
   }
 
   // The bonds read positions and which bonds are intact, nothing the neighbour list keeps: they are summed
@@ -98,6 +100,7 @@ class PairEffect final : public Effect<D> {
   void add_forces(State<D>& s) override {
     const double cut2 = cutoff_ * cutoff_;
     settle_breaks(s, std::exchange(broke_, 0));
+    if (spec_.model == PairModel::cutoff) record_crossings(s);
     // cutoff: these forces come first and set f (stage::assigns_forces), so with no pair f is zero
     if (spec_.model == PairModel::cutoff && list_.size() == 0) std::fill(s.f.begin(), s.f.end(), V::Zero());
     if (uses_list_ && list_.size() > 0) {
@@ -117,10 +120,18 @@ class PairEffect final : public Effect<D> {
   // step that follows decides whether to rebuild (after_move).
   bool resident_begin(State<D>&, const std::vector<long>& bounds) override {
     const std::size_t threads = bounds.size() - 1;
-    moved_of_.assign(threads * 8, moved_bound_);  // a cache line per thread
+    moved_of_.assign(threads * 8, moved_bound_);  // a cache line per thread: [0] moved_bound_, [1] drift_
     if (spec_.model == PairModel::cutoff) {
-      if (list_.size() == 0) return false;  // (the plain step zeroes f)
+      if (list_.size() == 0 || far_margin_ < 0.0) return false;  // (the plain step zeroes f / makes a full pass)
       list_stencil_.prepare(bounds);
+      for (std::size_t t = 0; t < threads; ++t) moved_of_[t * 8 + 1] = drift_;
+      near_of_.resize(threads);
+      for (auto& v : near_of_) v.clear();
+      for (const int b : near_) {  // each near bond is tested by the thread owning its first particle
+        const long i = bi_[static_cast<std::size_t>(b)];
+        const std::size_t t = static_cast<std::size_t>(std::upper_bound(bounds.begin(), bounds.end(), i) - bounds.begin()) - 1;
+        near_of_[std::min(t, threads - 1)].push_back(b);
+      }
       return true;
     }
     stencil_.prepare(bounds);
@@ -140,17 +151,24 @@ class PairEffect final : public Effect<D> {
     return true;
   }
   bool resident_due(const State<D>&, double max_step, int tid) const override {
-    return uses_list_ && !list_holds(moved_of_[static_cast<std::size_t>(tid) * 8] + max_step);
+    const double* mine = &moved_of_[static_cast<std::size_t>(tid) * 8];
+    return (uses_list_ && !list_holds(mine[0] + max_step)) ||
+           (spec_.model == PairModel::cutoff && crossing_pass_due(mine[1] + max_step));
   }
   void resident_moved(double max_step, int tid) override {
-    if (uses_list_) moved_of_[static_cast<std::size_t>(tid) * 8] += max_step;
+    double* mine = &moved_of_[static_cast<std::size_t>(tid) * 8];
+    if (uses_list_) mine[0] += max_step;
+    if (spec_.model == PairModel::cutoff) mine[1] += max_step;
   }
   long resident_forces(State<D>& s, const double* x, int tid) override {
     const double cut2 = cutoff_ * cutoff_;
     return detail::with_law(laws_, law_table_, nphase_ == 1, [&](const auto& law) {
-      if (spec_.model == PairModel::cutoff) {  // a pair beyond D adds zero: nothing to settle
+      if (spec_.model == PairModel::cutoff) {  // the events: near bonds that crossed D (settled by record_crossings)
         list_stencil_.add_forces_of(tid, x, s.f.front().data(), law, cut2, inv_rmin_);
-        return 0L;
+        long crossed = 0;
+        for (const int b : near_of_[static_cast<std::size_t>(tid)])
+          crossed += (bond_r2(x, static_cast<std::size_t>(b)) <= cut2) != static_cast<bool>(alive_[static_cast<std::size_t>(b)]);
+        return crossed;
       }
       const long mine = stencil_.add_forces_of(tid, x, s.f.front().data(), law, cut2, inv_rmin_);
       if (mine > 0) broke_of_team_.fetch_add(mine, std::memory_order_relaxed);
@@ -172,14 +190,20 @@ class PairEffect final : public Effect<D> {
   }
   void resident_end(State<D>&) override {
     if (uses_list_) moved_bound_ = moved_of_.front();
+    if (spec_.model == PairModel::cutoff) drift_ = moved_of_[1];
   }
-  void resident_settle(State<D>& s) override { settle_breaks(s, broke_of_team_.exchange(0)); }
+  void resident_settle(State<D>& s) override {
+    settle_breaks(s, broke_of_team_.exchange(0));
+    if (spec_.model == PairModel::cutoff) record_crossings(s);
+  }
 
   void save(std::vector<double>& out) const override {
     out.push_back(static_cast<double>(first_break_step_));
     out.push_back(first_break_time_);
     for (std::size_t b = 0; b < alive_.size(); ++b) out.push_back(alive_[b]), out.push_back(phi_break_[b]);
     out.push_back(skin_);  // the adapted skin decides when the list is next rebuilt: part of the state
+    out.push_back(static_cast<double>(broke_count_));
+    out.push_back(static_cast<double>(re_formed_count_));
   }
   void load(const double*& in) override {
     first_break_step_ = static_cast<long>(*in++);
@@ -190,9 +214,12 @@ class PairEffect final : public Effect<D> {
       if (spec_.model == PairModel::bonded) stencil_.set_alive(b, alive_[b]);
     }
     skin_ = *in++;
+    broke_count_ = static_cast<long>(*in++);
+    re_formed_count_ = static_cast<long>(*in++);
   }
 
   void after_move(State<D>& s, double max_step) override {
+    if (spec_.model == PairModel::cutoff) drift_ += max_step;
     // Verlet criterion with a bound instead of a pass over the particles: no particle has moved more than
     // the sum of the largest single-step moves since the build. Rebuild before two could have closed the skin.
     moved_bound_ += max_step;
@@ -221,17 +248,22 @@ class PairEffect final : public Effect<D> {
     rebuild(s);
   }
 
+  // The cutoff model's potential is shifted to zero at D (phi(r) - phi(D) for each pair within D): the force is
+  // unchanged, and the energy no longer jumps by phi(D) each time a pair crosses D, so kinetic + potential
+  // - boundary work stays a conservation check (unshifted, the 3-D block's fell by 5.4e10 erg in 1e-4 s).
+  // pairs_beyond_cutoff is counted from the distances here, apart from the record of crossings.
   void observe(const State<D>& s, Observables& o) const override {
     double pe = 0.0;
     long beyond = 0;
+    const double cut2 = cutoff_ * cutoff_;
     for (std::size_t b = 0; b < bi_.size(); ++b) {
-      const double r = (s.x[static_cast<std::size_t>(bi_[b])] - s.x[static_cast<std::size_t>(bj_[b])]).norm();
       if (spec_.model == PairModel::bonded) {
+        const double r = (s.x[static_cast<std::size_t>(bi_[b])] - s.x[static_cast<std::size_t>(bj_[b])]).norm();
         if (alive_[b])
           pe += law_potential(laws_[static_cast<std::size_t>(blaw_[b])], r, r_min_);
         else
           ++beyond, o.bond_break_energy += phi_break_[b];
-      } else if (r > cutoff_) {
+      } else if (!(bond_r2(s.x.front().data(), b) <= cut2)) {
         ++beyond;
       }
     }
@@ -239,7 +271,7 @@ class PairEffect final : public Effect<D> {
       const double r = (s.x[static_cast<std::size_t>(list_.i[p])] - s.x[static_cast<std::size_t>(list_.j[p])]).norm();
       const PairLaw& law = laws_[static_cast<std::size_t>(list_.law[p])];
       if (spec_.model == PairModel::cutoff) {
-        if (r <= cutoff_) pe += law_potential(law, r, r_min_);
+        if (r <= cutoff_) pe += law_potential(law, r, r_min_) - law_potential(law, cutoff_, r_min_);
       } else {
         const double reach = contact_reach_[static_cast<std::size_t>(list_.law[p])];
         if (r < reach) pe += law_potential(law, r, r_min_) - law.potential(reach);
@@ -289,6 +321,13 @@ class PairEffect final : public Effect<D> {
   }
 
   const std::vector<std::uint8_t>& alive() const { return alive_; }
+  bool cutoff_model() const { return spec_.model == PairModel::cutoff; }
+  long broke_count() const { return broke_count_; }
+  long re_formed_count() const { return re_formed_count_; }
+  void take_events(std::vector<BondEvent>& out) {
+    out.insert(out.end(), events_.begin(), events_.end());
+    events_.clear();
+  }
   long first_break_step() const { return first_break_step_; }
   double first_break_time() const { return first_break_time_; }
   long list_builds() const { return list_builds_; }
@@ -312,7 +351,62 @@ class PairEffect final : public Effect<D> {
     // A pair whose bond just broke must repel as a contact from the next step on: rebuild the list then
     // (it excluded the pair while bonded).
     if (uses_list_) moved_bound_ = std::numeric_limits<double>::infinity();
-    if (first_break_step_ < 0) first_break_step_ = s.step, first_break_time_ = s.time();
+  }
+
+  void record(const State<D>& s, std::size_t b, bool re_formed) {
+    events_.push_back({s.step, s.time(), static_cast<long>(b), re_formed});
+    if (re_formed) {
+      ++re_formed_count_;
+    } else {
+      ++broke_count_;
+      if (first_break_step_ < 0) first_break_step_ = s.step, first_break_time_ = s.time();
+    }
+  }
+
+  // Squared length of original bond b at positions x (N x D), with the arithmetic of the sweeps.
+  double bond_r2(const double* x, std::size_t b) const {
+    const std::size_t i = static_cast<std::size_t>(bi_[b]), j = static_cast<std::size_t>(bj_[b]);
+    const double d0 = x[i * D] - x[j * D], d1 = x[i * D + 1] - x[j * D + 1];
+    const double d2 = D == 3 ? x[i * D + D - 1] - x[j * D + D - 1] : 0.0;
+    return d0 * d0 + d1 * d1 + d2 * d2;
+  }
+
+  // Cutoff model: every crossing of D by an original bond is recorded at the step it happens (alive_: within
+  // D). A bond's length changes by at most twice the largest move of a particle, so a bond whose length was
+  // |r - D| = m from D at the last full pass cannot cross before the moves since (drift_) add up to m / 2.
+  // Each step tests only the bonds that were near D (near_); all of them again once the drift could have
+  // carried any other across (far_margin_: the smallest m among them). Which bonds a step tests changes
+  // nothing recorded, only what it costs: the record is the same for any schedule of passes.
+  bool crossing_pass_due(double drift) const { return !(2.0 * drift + 1e-9 * r0_ < far_margin_); }
+  void record_crossings(const State<D>& s) {
+    const double cut2 = cutoff_ * cutoff_;
+    const double* x = s.x.front().data();
+    const auto test = [&](std::size_t b) {
+      const double r2 = bond_r2(x, b);
+      const bool within = r2 <= cut2;
+      if (within != static_cast<bool>(alive_[b])) alive_[b] = within, record(s, b, within);
+      return r2;
+    };
+    if (!crossing_pass_due(drift_)) {
+      for (const int b : near_) test(static_cast<std::size_t>(b));
+      return;
+    }
+    // The window of near bonds follows how long the last full pass lasted (fragments flying apart move
+    // far each step; an intact lattice hardly at all), as the Verlet skin does.
+    const long lasted = s.step - full_pass_step_;
+    if (far_margin_ >= 0.0 && lasted < 20) window_ = std::min(2.0 * window_, 0.5 * r0_);
+    if (lasted > 2000) window_ = std::max(0.5 * window_, 0.02 * r0_);
+    near_.clear();
+    far_margin_ = std::numeric_limits<double>::infinity();
+    for (std::size_t b = 0; b < bi_.size(); ++b) {
+      const double margin = std::abs(std::sqrt(test(b)) - cutoff_);
+      if (margin < window_)
+        near_.push_back(static_cast<int>(b));
+      else
+        far_margin_ = std::min(far_margin_, margin);
+    }
+    drift_ = 0.0;
+    full_pass_step_ = s.step;
   }
 
   // The bonded model's contacts: unbonded pairs closer than r0 feel the law's repulsive branch. A select,
@@ -376,14 +470,12 @@ class PairEffect final : public Effect<D> {
     const double* x = s.x.front().data();
     for (std::size_t b = 0; b < bi_.size(); ++b) {
       if (!alive_[b]) continue;
-      const std::size_t i = static_cast<std::size_t>(bi_[b]), j = static_cast<std::size_t>(bj_[b]);
-      const double d0 = x[i * D] - x[j * D], d1 = x[i * D + 1] - x[j * D + 1];
-      const double d2 = D == 3 ? x[i * D + D - 1] - x[j * D + D - 1] : 0.0;
-      const double r2 = d0 * d0 + d1 * d1 + d2 * d2;  // exactly as the sweeps compute it
+      const double r2 = bond_r2(x, b);
       if (!(r2 <= cut2)) {
         alive_[b] = 0;
         stencil_.set_alive(b, false);
         phi_break_[b] = law_potential(laws_[static_cast<std::size_t>(blaw_[b])], std::sqrt(r2), r_min_);
+        record(s, b, false);
       }
     }
   }
@@ -533,6 +625,16 @@ class PairEffect final : public Effect<D> {
   std::vector<std::uint8_t> alive_;
   std::vector<double> phi_break_;
   long broke_ = 0;  ///< bonds the last add_fused_forces found too long (retired by add_forces)
+  std::vector<BondEvent> events_;  ///< recorded since the last take_events
+  long broke_count_ = 0;           ///< bonds broken (cutoff model: pairs leaving D), over the whole run
+  long re_formed_count_ = 0;       ///< cutoff model: pairs coming back within D
+  // cutoff model's crossing record (record_crossings)
+  std::vector<int> near_;               ///< bonds within window_ of D at the last full pass, ascending
+  std::vector<std::vector<int>> near_of_;  ///< resident steps: near_ by the thread owning a bond's first particle
+  double far_margin_ = -1.0;            ///< cm: smallest |r - D| of the other bonds then (< 0: pass due)
+  double drift_ = 0.0;                  ///< cm: the largest moves summed since the last full pass
+  double window_ = 0.0;                 ///< cm: how near D a bond is tested every step
+  long full_pass_step_ = 0;
   std::atomic<long> broke_of_team_{0};  ///< the same, summed by the threads of resident_forces
   struct alignas(64) ThreadContacts {  ///< resident steps: a thread's contacts (a cache line of its own)
     std::vector<int> pairs;            ///< the contacts its particles are in, ascending
@@ -565,6 +667,9 @@ BondView<D> bond_view(const Effect<D>& e) {
   BondView<D> v;
   if (auto* p = dynamic_cast<const PairEffect<D>*>(&e)) {
     v.alive = &p->alive();
+    v.cutoff_model = p->cutoff_model();
+    v.broke = p->broke_count();
+    v.re_formed = p->re_formed_count();
     v.first_break_step = p->first_break_step();
     v.first_break_time = p->first_break_time();
     v.list_builds = p->list_builds();
@@ -573,9 +678,16 @@ BondView<D> bond_view(const Effect<D>& e) {
   return v;
 }
 
+template <int D>
+void take_bond_events(Effect<D>& e, std::vector<BondEvent>& out) {
+  if (auto* p = dynamic_cast<PairEffect<D>*>(&e)) p->take_events(out);
+}
+
 template std::unique_ptr<Effect<2>> make_pair_effect<2>(const System&, const PairSpec&);
 template std::unique_ptr<Effect<3>> make_pair_effect<3>(const System&, const PairSpec&);
 template BondView<2> bond_view<2>(const Effect<2>&);
 template BondView<3> bond_view<3>(const Effect<3>&);
+template void take_bond_events<2>(Effect<2>&, std::vector<BondEvent>&);
+template void take_bond_events<3>(Effect<3>&, std::vector<BondEvent>&);
 
 }  // namespace pmfrag

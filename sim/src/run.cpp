@@ -61,7 +61,7 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
     ov << "# source: " << scene.file << "\n";
     for (const auto& o : scene.overrides) ov << o << "\n";
   }
-  std::unique_ptr<H5mdWriter> writer_ptr = from ? std::make_unique<H5mdWriter>(traj.string(), from->frames)
+  std::unique_ptr<H5mdWriter> writer_ptr = from ? std::make_unique<H5mdWriter>(traj.string(), from->frames, from->bond_events)
                                                 : std::make_unique<H5mdWriter>(traj.string(), sys, scene, rp);
   H5mdWriter& writer = *writer_ptr;
 
@@ -84,7 +84,15 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
 
   std::vector<Eigen::Matrix<double, D, 1>> v;
   std::vector<double> xbuf, vbuf;
+  std::vector<BondEvent> events;
+  // The bond events recorded since the last frame or checkpoint go to the trajectory before either.
+  auto record_events = [&] {
+    events.clear();
+    for (const auto& e : lf.effects()) take_bond_events<D>(*e, events);
+    writer.append_bond_events(events);
+  };
   auto write = [&] {
+    record_events();
     const auto& s = lf.state();
     lf.whole_step_velocity(v);
     xbuf.resize(s.size() * D);
@@ -100,8 +108,11 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
   const auto t0 = clock::now();
   auto last_report = t0;
   auto checkpoint = [&] {
+    record_events();
+    writer.flush();  // the rows the checkpoint counts are on disk before it
     const auto& s = lf.state();
     Checkpoint c;
+    c.bond_events = writer.bond_event_rows();
     c.step = s.step;
     c.time = s.t;
     c.dt = s.dt;
@@ -136,7 +147,7 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
         dt_min_taken = std::min(dt_min_taken, h);
         lf.step(h);
         frame_due = !(lf.state().t < static_cast<double>(writer.frames()) * every_s - tol) || done();
-        take_checkpoint = frame_due && !done() && writer.frames() % checkpoint_frames == 0;
+        take_checkpoint = frame_due && (done() || writer.frames() % checkpoint_frames == 0);
       } else {
         // Steps to the next frame, checkpoint or progress line in one call: quiet steps then run many to a
         // pass of the thread team.
@@ -144,7 +155,7 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
         lf.advance(std::min({every - k0 % every, checkpoint_every - k0 % checkpoint_every, 256 - (k0 & 255), steps - k0}));
         const long k = lf.state().step;
         frame_due = k % every == 0 || k == steps;
-        take_checkpoint = k % checkpoint_every == 0 && k < steps;
+        take_checkpoint = k % checkpoint_every == 0 || k == steps;  // and at the last step
       }
       const long k = lf.state().step;
       // At a checkpoint step the lists are rebuilt first, in an uninterrupted run as in a resumed one, so
@@ -184,11 +195,18 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
   res.dt_min = dt_min_taken;
   res.thread_steps = lf.thread_steps();
   res.frames = writer.frames();
+  record_events();  // a run stopped between frames: its last events too (after the last frame's rows)
   writer.close();
   for (const auto& e : lf.effects()) {
     const auto bv = bond_view<D>(*e);
-    if (bv.alive && bv.first_break_step >= 0) res.first_break_time = bv.first_break_time;
-    if (bv.alive) res.list_builds = bv.list_builds, res.skin = bv.skin;
+    if (!bv.alive) continue;
+    res.pair_model = bv.cutoff_model ? "cutoff" : "bonded";
+    if (bv.first_break_step >= 0) res.first_break_time = bv.first_break_time;
+    res.bonds_broken = bv.broke;
+    res.bonds_re_formed = bv.re_formed;
+    res.bonds_beyond_now = 0;
+    for (const auto a : *bv.alive) res.bonds_beyond_now += !a;
+    res.list_builds = bv.list_builds, res.skin = bv.skin;
   }
 
   // run.json: what ran and how fast (for sweeps and benchmarks); written whole, then renamed.
@@ -209,7 +227,10 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
               if (res.thread_steps[t] > 0) by += (by.empty() ? "\"" : ", \"") + std::to_string(t) + "\": " + std::to_string(res.thread_steps[t]);
             return by;
           }() << "}"
+       << ",\n  \"pair_model\": \"" << res.pair_model << "\""
        << ",\n  \"first_break_time_s\": " << fmt("%.10g", res.first_break_time)
+       << ",\n  \"bond_events\": {\"broken\": " << res.bonds_broken << ", \"re_formed\": " << res.bonds_re_formed
+       << ", \"beyond_cutoff_at_end\": " << res.bonds_beyond_now << ", \"rows\": " << writer.bond_event_rows() << "}"
        << ",\n  \"neighbour_list_builds\": " << res.list_builds
        << ",\n  \"verlet_skin_r0\": " << fmt("%.4g", res.skin / sys.r0) << "\n}\n";
   }

@@ -1,6 +1,7 @@
 // Trajectories in H5MD 1.1 (HDF5): /h5md metadata, /particles/all/{position,velocity} as time series with
 // step and time, time-independent species (phase), id, mass and box, /connectivity/bonds (the original
-// neighbour pairs), /observables, and /parameters (the scene text and the scalars of the run).
+// neighbour pairs), /connectivity/broken_bonds (the engine's record of every bond it broke: an event table,
+// README "Trajectories"), /observables, and /parameters (the scene text and the scalars of the run).
 // Every frame is flushed, so a killed run leaves a file readable up to its last frame.
 #pragma once
 
@@ -25,22 +26,40 @@ class H5mdWriter {
  public:
   /// Creates `path` (truncating it) and writes everything time-independent.
   H5mdWriter(const std::string& path, const System& sys, const Scene& scene, const RunParameters& run);
-  /// Reopens an existing trajectory to append, keeping its first `keep_frames` frames (resume).
-  H5mdWriter(const std::string& path, long keep_frames);
+  /// Reopens an existing trajectory to append, keeping its first `keep_frames` frames and `keep_events` rows
+  /// of the bond record (resume).
+  H5mdWriter(const std::string& path, long keep_frames, long keep_events);
   ~H5mdWriter();
   H5mdWriter(const H5mdWriter&) = delete;
   H5mdWriter& operator=(const H5mdWriter&) = delete;
 
   /// Appends one frame: positions r_k and whole-step velocities v_k (N x dim, row-major), and observables.
+  /// With it, the number of bond-record rows written so far (every event up to this step: append them first).
   void write_frame(long step, double time, const std::vector<double>& position, const std::vector<double>& velocity,
                    const Observables& obs);
+  /// Appends rows to the bond record (/connectivity/broken_bonds), in step order; on disk at the next flush.
+  void append_bond_events(const std::vector<BondEvent>& events);
+  /// Writes everything appended so far to disk (write_frame does it too).
+  void flush();
   long frames() const { return frames_; }
+  long bond_event_rows() const { return events_; }
   void close();
 
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
-  long frames_ = 0;
+  long frames_ = 0, events_ = 0;
+};
+
+/// The engine's record of bond events read back: the rows that lie wholly before any damage, and for each
+/// frame how many rows belong to it and the frames before (rows_at_frame[k]: the events of steps up to frame
+/// k's). A frame whose rows are not all readable (a record cut short) has no entry: rows_at_frame is then
+/// shorter than the frames, and damage() says why.
+struct BondRecord {
+  std::string model;  ///< "bonded" or "cutoff" (what the events mean: effects.hpp, BondEvent)
+  std::vector<BondEvent> events;
+  std::vector<long> rows_at_frame;
+  std::string damage;  ///< "" if whole
 };
 
 /// A frame read back (for tests, analysis, resume).
@@ -68,6 +87,11 @@ class H5mdReader {
   /// Times of the frames [s] (cheap: no particle data is read).
   std::vector<double> times() const;
   std::vector<std::array<int, 2>> bonds() const;
+  /// Whether the trajectory holds the engine's record of bond events (older trajectories do not).
+  bool has_bond_record() const;
+  /// The record, checked: rows in step order naming bonds of /connectivity/bonds, each a change of state
+  /// (throws std::runtime_error naming the file and dataset otherwise).
+  BondRecord bond_record() const;
   std::vector<int> species() const;
   std::vector<double> mass() const;
   /// Observable time series by name (kinetic_energy, potential_energy, total_energy, boundary_work, ...).
@@ -80,6 +104,8 @@ class H5mdReader {
 
  private:
   long long file_ = -1;
+  std::string path_;
+  unsigned long long limit_ = 0;  ///< bytes before the cut of a truncated file (0: whole)
   int dim_ = 2;
   std::size_t n_ = 0;
   long frames_ = 0;
@@ -93,6 +119,7 @@ struct Checkpoint {
   double time = 0.0, dt = 0.0;  ///< s: time of the step, and the step that led to it
   int level = 0, calm = 0;      ///< adaptive steps: StepLevels history
   long frames = 0;
+  long bond_events = 0;  ///< rows of the trajectory's bond record at that step
   std::vector<double> position, velocity, effects;
 };
 /// Written to `path`.tmp and renamed, so a checkpoint on disk is always complete.

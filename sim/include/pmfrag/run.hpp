@@ -28,7 +28,11 @@ struct RunResult {
   long steps = 0, frames = 0;
   std::size_t particles = 0;
   double dt = 0.0, dt_limit = 0.0, wall_s = 0.0;
-  double first_break_time = -1.0;  ///< s; -1 if no bond broke
+  std::string pair_model = "none";  ///< "bonded", "cutoff" or "none"
+  double first_break_time = -1.0;  ///< s; -1 if no bond broke (cutoff model: no pair of the lattice left D)
+  long bonds_broken = 0;      ///< bonded: bonds broken; cutoff: times a pair of the lattice left D (whole run)
+  long bonds_re_formed = 0;   ///< cutoff: times such a pair came back within D
+  long bonds_beyond_now = 0;  ///< bonds broken / beyond D at the last step
   long list_builds = 0;            ///< neighbour-list builds (since a resume, if resumed)
   double skin = 0.0;               ///< cm: the Verlet skin at the end (0: no list)
   bool adaptive = false;           ///< dt = "adaptive": dt is the cap, dt_min the smallest step taken

@@ -16,7 +16,8 @@ enum class Compression { lz4, zlib, none };
 struct ExportOptions {
   long every = 1;                ///< write every K-th frame (the last frame always)
   std::set<std::string> fields;  ///< point/cell arrays to write; empty = all
-  BreakCriterion criterion;      ///< when a bond counts as broken (fragments, damage, `broken`)
+  /// when a bond counts as broken (fragments, damage, `broken`): none = the engine's record (BondStates)
+  std::optional<BreakCriterion> criterion;
   Compression compression = Compression::lz4;
 };
 

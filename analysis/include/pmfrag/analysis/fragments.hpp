@@ -1,19 +1,18 @@
-// Fragments from a trajectory: bonds (the original neighbour pairs) break the first time they are longer
-// than a criterion and stay broken; fragments are the connected components of the intact bonds.
+// Fragments from a trajectory: the connected components of the intact bonds (the original neighbour pairs).
+// Which bonds are broken at a frame comes from the engine's record in the trajectory (every bond it broke, at
+// the step it broke), or, for trajectories without one or when asked, from the bond lengths at the frames.
 // Streams frame by frame: memory is a few frames whatever the trajectory's length.
 #pragma once
 
 #include "pmfrag/analysis/crack.hpp"
+#include "pmfrag/h5md.hpp"
 
 #include <Eigen/Core>
 
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
-
-namespace pmfrag {
-class H5mdReader;
-}
 
 namespace pmfrag::analysis {
 
@@ -25,6 +24,8 @@ struct BreakCriterion {
   double factor = 1.7;
   /// Parses "D", "rd" or a number (factor x r0); throws std::invalid_argument otherwise.
   static BreakCriterion parse(const std::string& text);
+  /// "" (the default: the engine's record) gives none; anything else as parse().
+  static std::optional<BreakCriterion> parse_option(const std::string& text);
   std::string describe() const;
 };
 
@@ -32,6 +33,7 @@ struct TimelineRow {
   long step = 0;
   double time = 0.0;
   long broken = 0;
+  long broken_engine = -1;  ///< the engine's own count at this frame (pairs_beyond_cutoff); -1 if absent
   long fragments = 0, fragments_2plus = 0, fragments_1pct = 0;
   double largest_fraction = 0.0, mean_mass = 0.0;
   double kinetic = 0.0, potential = 0.0;
@@ -49,7 +51,8 @@ struct Fragment {
 
 struct FragmentReport {
   int p = 0, q = 0;
-  double threshold_cm = 0.0;
+  std::string bond_state;     ///< "recorded" (the engine's record) or "distance" (bond lengths at frames)
+  double threshold_cm = 0.0;  ///< the distance reading's break length (recorded: D, where the engine broke them)
   std::string criterion;
   std::vector<TimelineRow> timeline;
   std::vector<Fragment> final_fragments;  ///< sorted by mass, largest first
@@ -67,30 +70,65 @@ struct FrameLabels {
   std::vector<double> damage;  ///< fraction of each particle's original bonds broken
 };
 
-class FragmentTracker {
+/// Which original bonds are broken at each frame, read in one of two ways:
+///  recorded - the engine's record replayed up to the frame's step: exactly the bonds the simulation broke
+///             (cutoff model: the pairs beyond D then; a pair that came back within D is intact again);
+///  distance - a bond breaks the first time it is longer than a length at a frame, and stays broken (what
+///             happened between frames is not seen: a bond that broke and closed again counts as intact).
+class BondStates {
  public:
-  FragmentTracker(std::size_t particles, std::vector<std::array<int, 2>> bonds, std::vector<double> mass, int dim,
-                  double threshold_cm);
-  /// Advances the break state with one frame's positions (N x dim); returns the labels of that frame.
-  FrameLabels update(const std::vector<double>& position);
+  /// The distance reading.
+  BondStates(std::vector<std::array<int, 2>> bonds, int dim, double threshold_cm);
+  /// The recorded reading, over `bonds` bonds.
+  BondStates(std::size_t bonds, BondRecord record);
+  /// The reading for a trajectory: by distance if `distance` is given, else its record, else (a trajectory
+  /// without one, written by an older pmfrag) by distance at D.
+  static BondStates open(const H5mdReader& trajectory, const std::optional<BreakCriterion>& distance);
+
+  /// Whether frame k's bond state is known (a record cut short does not reach the last frames).
+  bool covers(long frame) const;
+  /// Advances to frame k with its positions (N x dim); frames in ascending order, each covered.
+  void advance(long frame, const std::vector<double>& position);
   const std::vector<std::uint8_t>& broken() const { return broken_; }
   long broken_count() const { return count_; }
+  bool recorded() const { return record_.has_value(); }
+  std::string source() const { return recorded() ? "recorded" : "distance"; }
+  /// What a broken bond is here, in words.
+  const std::string& describe() const { return describe_; }
+  double threshold_cm() const { return threshold_; }
+  /// What is missing of the record ("" if whole, or for the distance reading).
+  std::string damage() const { return record_ ? record_->damage : std::string(); }
+
+ private:
+  std::vector<std::array<int, 2>> bonds_;
+  int dim_ = 2;
+  double threshold_ = 0.0;
+  std::optional<BondRecord> record_;
+  std::size_t applied_ = 0;  ///< recorded: rows replayed so far
+  std::vector<std::uint8_t> broken_;
+  long count_ = 0;
+  std::string describe_;
+};
+
+/// Labels fragments from a set of broken bonds.
+class FragmentTracker {
+ public:
+  FragmentTracker(std::size_t particles, std::vector<std::array<int, 2>> bonds, std::vector<double> mass);
+  /// The fragments when `broken` (one flag per bond) are broken.
+  FrameLabels label(const std::vector<std::uint8_t>& broken) const;
 
  private:
   std::size_t n_;
   std::vector<std::array<int, 2>> bonds_;
   std::vector<double> mass_;
-  int dim_;
-  double threshold2_;
-  std::vector<std::uint8_t> broken_;
-  long count_ = 0;
 };
 
 /// The bond length [cm] beyond which a bond of this trajectory counts as broken.
 double break_length(const H5mdReader& trajectory, const BreakCriterion& criterion);
 
-/// Reads RUN_DIR/trajectory.h5 and analyses every frame.
-FragmentReport analyse_fragments(const std::string& trajectory, const BreakCriterion& criterion);
+/// Reads RUN_DIR/trajectory.h5 and analyses every frame whose bond state is known: from the engine's record,
+/// or by distance if `distance` is given (or the trajectory has no record).
+FragmentReport analyse_fragments(const std::string& trajectory, const std::optional<BreakCriterion>& distance);
 
 /// Writes fragments_timeline.csv, fragments_final.csv, fragment_sizes.csv and summary.json into dir
 /// (each written whole under a temporary name, then renamed).
