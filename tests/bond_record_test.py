@@ -125,6 +125,8 @@ def damage():
             rows_at = h5["connectivity/broken_bonds/rows_at_frame/value"][:]
             nbonds = len(h5["connectivity/bonds"])
         assert len(whole) == 31 and rows_at[-1] > 10, (len(whole), rows_at[-1])
+        with h5py.File(good / "checkpoint.h5", "r") as ck:  # the last checkpoint is taken at the last step
+            assert ck["step"][()] == 3000 and ck["bond_events"][()] == rows_at[-1], (ck["step"][()], ck["bond_events"][()])
 
         # Cut short: keep the rows of frames 0..k-1 and half of frame k's new ones (k: the second frame with
         # new rows, so that the frames kept have some).
@@ -146,6 +148,17 @@ def damage():
         assert "PARTIAL" in exp and f"exported {k} of {k} frames" in exp, exp
         assert "PARTIAL" in (cut / "particles.pvd").read_text()
         print(f"a record cut short at frame {k} of 31: fragments and export read frames 0..{k - 1} and say PARTIAL")
+
+        # A trajectory written before the record existed: read by distance at D, and summary.json says so.
+        old = Path(tmp) / "old"
+        shutil.copytree(good, old)
+        with h5py.File(old / "trajectory.h5", "r+") as h5:
+            del h5["connectivity/broken_bonds"]
+        out = subprocess.run([pmfrag, "fragments", str(old)], check=True, capture_output=True, text=True).stdout
+        summary = json.loads((old / "summary.json").read_text())
+        assert summary["bond_state"] == "distance" and "distance reading" in out, (summary, out)
+        assert summary["partial"] is False, summary
+        print("a trajectory without a record: read by distance (" + summary["break_criterion"] + ")")
 
         # A row naming a bond that does not exist.
         bad = Path(tmp) / "bad"
