@@ -33,6 +33,8 @@ void run(const FragmentsCli& o) {
   for (const auto& g : rep.final_fragments) singles += g.particles == 1;
   std::printf("fragments of %s: (p,q) = (%d,%d), broken bonds: %s; %ld frames%s\n", o.dir.c_str(), rep.p, rep.q,
               rep.criterion.c_str(), rep.frames_read, rep.partial ? " (PARTIAL)" : "");
+  if (rep.target_particles > 0)
+    std::printf("  %ld particles of bodies held in place (targets) are left out of the counts below\n", rep.target_particles);
   if (rep.onset_time >= 0)
     std::printf("  onset (first broken bond, frame resolution): %.4e s\n", rep.onset_time);
   else
@@ -48,8 +50,15 @@ void run(const FragmentsCli& o) {
               "mass), largest %.1f %% of the mass\n",
               end.time, end.broken, end.fragments, end.fragments - singles, singles, end.fragments_1pct,
               100.0 * end.largest_fraction);
+  if (const auto& d = rep.distribution)
+    std::printf("  mass distribution: n(m) ~ m^-tau, tau = %.3f (95 %% interval %.3f-%.3f) over %ld fragments of >= %ld "
+                "particles (KS distance %.3f); second largest %.1f %% of the mass\n",
+                d->exponent, d->ci_low, d->ci_high, d->fitted, d->s_min, d->ks_distance, 100.0 * rep.second_largest_fraction);
+  else
+    std::printf("  mass distribution: no power-law fit (%s)\n", rep.distribution_note.c_str());
   if (rep.partial) std::printf("  note: %s\n", rep.note.c_str());
-  std::printf("  wrote fragments_timeline.csv, fragments_final.csv, fragment_sizes.csv, summary.json in %s\n", o.dir.c_str());
+  std::printf("  wrote fragments_timeline.csv, fragments_final.csv, fragment_sizes.csv, fragment_mass_ccdf.csv, "
+              "summary.json in %s\n", o.dir.c_str());
 }
 
 }  // namespace

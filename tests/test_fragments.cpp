@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <numbers>
+#include <random>
 #include <set>
 
 using namespace pmfrag;
@@ -121,4 +123,64 @@ TEST(Crack, TipsAreTheEndsOfTheBrokenBondsAlongTheirLine) {
   broken.assign(6, 0);
   broken[2] = 1;
   EXPECT_FALSE(analysis::crack_extent(x0, 2, bonds, broken).present) << "one broken bond is not yet a crack";
+}
+
+TEST(PowerLaw, HurwitzZetaMatchesKnownValues) {
+  EXPECT_NEAR(hurwitz_zeta(2.0, 1.0), std::numbers::pi * std::numbers::pi / 6.0, 1e-13);
+  EXPECT_NEAR(hurwitz_zeta(2.0, 2.0), std::numbers::pi * std::numbers::pi / 6.0 - 1.0, 1e-13);
+  EXPECT_NEAR(hurwitz_zeta(3.0, 1.0), 1.2020569031595942, 1e-13);
+  EXPECT_NEAR(hurwitz_zeta(1.5, 1.0), 2.6123753486854883, 1e-12);
+  EXPECT_NEAR(hurwitz_zeta(4.0, 1.0), std::pow(std::numbers::pi, 4) / 90.0, 1e-13);
+}
+
+namespace {
+// Exact draws from P(s) = s^-tau / zeta(tau, s_min), s >= s_min: the s with P(S >= s) >= u > P(S >= s + 1).
+std::vector<long> power_law_sample(double tau, long s_min, std::size_t n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  const double z = hurwitz_zeta(tau, static_cast<double>(s_min));
+  const auto tail = [&](long s) { return hurwitz_zeta(tau, static_cast<double>(s)) / z; };
+  std::vector<long> out;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double u = 1.0 - u01(rng);  // (0, 1]
+    long lo = s_min;
+    while (tail(2 * lo) >= u) lo *= 2;
+    long hi = 2 * lo;  // tail(lo) >= u > tail(hi)
+    while (hi - lo > 1) {
+      const long mid = lo + (hi - lo) / 2;
+      (tail(mid) >= u ? lo : hi) = mid;
+    }
+    out.push_back(lo);
+  }
+  return out;
+}
+}  // namespace
+
+TEST(PowerLaw, MaximumLikelihoodRecoversAKnownExponentWithinItsInterval) {
+  // 600 fragments drawn from a discrete power law above 2 particles (plus singles and small pieces below a
+  // bend, which the rule for s_min must leave out), for the exponents fragmentation reports (1 to 2.6).
+  for (const double tau : {1.5, 2.0, 2.6}) {
+    int covered = 0;
+    for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+      auto sizes = power_law_sample(tau, 4, 600, seed);
+      for (int k = 0; k < 200; ++k) sizes.push_back(1 + k % 3);  // 1-3 particles, far too many for the law
+      std::string why;
+      const auto fit = fit_discrete_power_law(sizes, why);
+      ASSERT_TRUE(fit) << why;
+      EXPECT_NEAR(fit->exponent, tau, 0.3) << "seed " << seed;  // s_min chosen from the data adds spread
+      EXPECT_GE(fit->s_min, 4) << "the excess below 4 particles must be cut off";
+      EXPECT_LT(fit->ci_low, fit->exponent);
+      EXPECT_GT(fit->ci_high, fit->exponent);
+      covered += fit->ci_low <= tau && tau <= fit->ci_high;
+    }
+    std::printf("tau = %.1f: the 95 %% interval covers it in %d of 10 samples\n", tau, covered);
+    EXPECT_GE(covered, 8) << "tau " << tau;
+  }
+}
+
+TEST(PowerLaw, TooFewFragmentsGiveNoExponentAndSayWhy) {
+  std::string why;
+  EXPECT_FALSE(fit_discrete_power_law({2, 3, 5, 2, 8, 13, 2, 4, 1, 1, 1, 1}, why));
+  EXPECT_NE(why.find("at least 10"), std::string::npos) << why;
+  EXPECT_TRUE(fit_discrete_power_law(power_law_sample(2.0, 2, 10, 7), why)) << why;
 }

@@ -230,7 +230,18 @@ FragmentReport analyse_fragments(const std::string& trajectory, const std::optio
   if (laws.size() == 1) rep.p = laws.front().p, rep.q = laws.front().q;  // several phases: no single (p,q)
   rep.criterion = states.describe();
   const auto mass = rd.mass();
-  for (double m : mass) rep.total_mass += m;
+  // A body every particle of which a kinematic selection moves (a target held in place) is a boundary, not
+  // material under study: its pieces are left out of the counts, fractions and distribution.
+  std::vector<std::uint8_t> target(mass.size(), 0);
+  {
+    const auto held = rd.held(), body = rd.body();
+    std::map<int, bool> free_body;
+    for (std::size_t i = 0; i < mass.size(); ++i) free_body[body[i]] = free_body[body[i]] || !held[i];
+    for (std::size_t i = 0; i < mass.size(); ++i) target[i] = !free_body[body[i]];
+  }
+  for (std::size_t i = 0; i < mass.size(); ++i)
+    if (!target[i]) rep.total_mass += mass[i], ++rep.particles;
+    else ++rep.target_particles;
   std::vector<double> ke, pe, engine;
   try {
     ke = rd.observable("kinetic_energy");
@@ -269,9 +280,9 @@ FragmentReport analyse_fragments(const std::string& trajectory, const std::optio
     if (k == 0) x_initial = f.position;
     row.crack = crack_extent(x_initial, rd.dim(), bonds, states.broken());
     std::map<int, double> fm;
-    for (std::size_t i = 0; i < mass.size(); ++i) fm[labels.fragment_id[i]] += mass[i];
     std::map<int, long> fn;
-    for (int id : labels.fragment_id) ++fn[id];
+    for (std::size_t i = 0; i < mass.size(); ++i)
+      if (!target[i]) fm[labels.fragment_id[i]] += mass[i], ++fn[labels.fragment_id[i]];
     row.fragments = static_cast<long>(fm.size());
     long five_pct = 0;
     for (const auto& [id, m] : fm) {
@@ -291,6 +302,23 @@ FragmentReport analyse_fragments(const std::string& trajectory, const std::optio
   }
   if (rep.frames_read == 0) throw std::runtime_error(trajectory + ": no readable frame");
   rep.final_fragments = describe_fragments(labels, last, mass, rd.dim());
+  {  // the targets' pieces left out (a fragment never spans two bodies: bonds join particles of one body)
+    std::vector<std::uint8_t> target_piece(rep.final_fragments.size(), 0);
+    for (std::size_t i = 0; i < mass.size(); ++i)
+      if (target[i]) target_piece[static_cast<std::size_t>(labels.fragment_id[i])] = 1;
+    std::erase_if(rep.final_fragments, [&](const Fragment& g) { return target_piece[static_cast<std::size_t>(g.id)]; });
+  }
+  if (rep.final_fragments.size() > 1) rep.second_largest_fraction = rep.final_fragments[1].mass / rep.total_mass;
+  // The power law of the final masses, in particles (one mass unit), the largest fragment left out.
+  const auto [lightest, heaviest] = std::minmax_element(mass.begin(), mass.end());
+  if (*lightest != *heaviest) {
+    rep.distribution_note = "particles of several masses: the discrete fit needs one mass unit";
+  } else {
+    rep.particle_mass = *lightest;
+    std::vector<long> sizes;
+    for (std::size_t k = 1; k < rep.final_fragments.size(); ++k) sizes.push_back(rep.final_fragments[k].particles);
+    rep.distribution = fit_discrete_power_law(sizes, rep.distribution_note);
+  }
   return rep;
 }
 
@@ -323,9 +351,10 @@ void write_fragment_report(const FragmentReport& r, const std::string& dir_name)
         << g.radius_of_gyration << "," << g.principal[0] << "," << g.principal[1] << "," << g.principal[2] << "\n";
   });
   write_atomically(dir / "fragment_sizes.csv", [&](std::ostream& o) {
-    // Logarithmic mass bins (factor 2) from the smallest fragment up; cumulative fraction of the total mass
-    // in fragments no heavier than the bin's upper edge.
-    o << "mass_low_g,mass_high_g,fragments,cumulative_mass_fraction\n";
+    // Logarithmic mass bins (factor 2) from the smallest fragment up: the count, n(m) (fragments per gram of
+    // bin width: its log-log slope is -tau), and the cumulative fraction of the total mass in fragments no
+    // heavier than the bin's upper edge.
+    o << "mass_low_g,mass_high_g,fragments,cumulative_mass_fraction,n_per_g\n";
     if (r.final_fragments.empty()) return;
     double lo = r.final_fragments.back().mass;
     for (const auto& g : r.final_fragments) lo = std::min(lo, g.mass);
@@ -335,7 +364,18 @@ void write_fragment_report(const FragmentReport& r, const std::string& dir_name)
       long count = 0;
       for (const auto& g : r.final_fragments)
         if (g.mass > a && g.mass <= 2 * a) ++count, cumulative += g.mass;
-      o << a << "," << 2 * a << "," << count << "," << cumulative / r.total_mass << "\n";
+      o << a << "," << 2 * a << "," << count << "," << cumulative / r.total_mass << "," << count / a << "\n";
+    }
+  });
+  write_atomically(dir / "fragment_mass_ccdf.csv", [&](std::ostream& o) {
+    // Each distinct final mass, heaviest first: how many fragments weigh at least that much, and that count
+    // as a fraction of all fragments (the complementary cumulative distribution, P(M >= m)).
+    o << "mass_g,particles,fragments_at_least,fraction_at_least\n";
+    const double all = static_cast<double>(r.final_fragments.size());
+    for (std::size_t k = 0; k < r.final_fragments.size(); ++k) {
+      const auto& g = r.final_fragments[k];
+      if (k + 1 < r.final_fragments.size() && r.final_fragments[k + 1].mass == g.mass) continue;  // a tie: its last
+      o << g.mass << "," << g.particles << "," << k + 1 << "," << static_cast<double>(k + 1) / all << "\n";
     }
   });
   long singles = 0, multi = 0;
@@ -345,13 +385,23 @@ void write_fragment_report(const FragmentReport& r, const std::string& dir_name)
     o << "{\n  \"p\": " << r.p << ",\n  \"q\": " << r.q << ",\n  \"bond_state\": \"" << r.bond_state
       << "\",\n  \"break_criterion\": \"" << r.criterion
       << "\",\n  \"break_length_cm\": " << r.threshold_cm << ",\n  \"frames\": " << r.frames_read
+      << ",\n  \"particles\": " << r.particles << ",\n  \"target_particles\": " << r.target_particles
       << ",\n  \"partial\": " << (r.partial ? "true" : "false") << ",\n  \"note\": \"" << json_escaped(r.note)
       << "\",\n  \"onset_time_s\": " << r.onset_time << ",\n  \"separation_time_s\": " << r.separation_time
       << ",\n  \"final_time_s\": " << end.time << ",\n  \"broken_bonds\": " << end.broken
       << ",\n  \"broken_bonds_engine\": " << (end.broken_engine >= 0 ? std::to_string(end.broken_engine) : "null")
       << ",\n  \"fragments\": " << end.fragments << ",\n  \"fragments_2plus\": " << multi
       << ",\n  \"single_particles\": " << singles << ",\n  \"fragments_1pct_mass\": " << end.fragments_1pct
-      << ",\n  \"largest_mass_fraction\": " << end.largest_fraction << "\n}\n";
+      << ",\n  \"largest_mass_fraction\": " << end.largest_fraction
+      << ",\n  \"second_largest_mass_fraction\": " << r.second_largest_fraction << ",\n  \"distribution\": ";
+    if (const auto& d = r.distribution)
+      o << "{\"exponent\": " << d->exponent << ", \"exponent_ci\": [" << d->ci_low << ", " << d->ci_high
+        << "], \"m_min_g\": " << d->s_min * r.particle_mass << ", \"s_min_particles\": " << d->s_min
+        << ", \"fragments_fitted\": " << d->fitted << ", \"ks_distance\": " << d->ks_distance << ", \"rule\": \""
+        << power_law_rule() << "\"}";
+    else
+      o << "null";
+    o << ",\n  \"distribution_note\": \"" << json_escaped(r.distribution_note) << "\"\n}\n";
   });
 }
 

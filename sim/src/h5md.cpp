@@ -239,6 +239,14 @@ H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& 
   array_dataset(m.particles, "id", ids, {n});
   array_dataset(m.particles, "mass", mass, {n});
   array_dataset(m.particles, "body", sys.body, {n});
+  {
+    // 1 for particles whose motion a kinematic selection prescribes (pulled rows, a target held in place)
+    std::vector<int> held(n, 0);
+    for (std::size_t k = 0; k < scene.kinematic.size(); ++k)
+      for (int i : select_particles(sys, scene.kinematic[k].select, "kinematic"))
+        held[static_cast<std::size_t>(i)] = 1;
+    array_dataset(m.particles, "held", held, {n});
+  }
   array_dataset(m.particles, "site", sys.site, {n});
 
   hid_t conn = make_group(m.file, "connectivity");
@@ -662,6 +670,11 @@ BondRecord H5mdReader::bond_record() const {
 
 std::vector<int> H5mdReader::species() const { return read_all<int>(file_, "/particles/all/species"); }
 std::vector<double> H5mdReader::mass() const { return read_all<double>(file_, "/particles/all/mass"); }
+std::vector<int> H5mdReader::body() const { return read_all<int>(file_, "/particles/all/body"); }
+std::vector<int> H5mdReader::held() const {
+  if (H5Lexists(file_, "/particles/all/held", H5P_DEFAULT) <= 0) return std::vector<int>(n_, 0);
+  return read_all<int>(file_, "/particles/all/held");
+}
 std::vector<double> H5mdReader::observable(const std::string& name) const {
   auto v = read_all<double>(file_, "/observables/" + name + "/value");
   if (static_cast<long>(v.size()) > frames_) v.resize(static_cast<std::size_t>(frames_));

@@ -94,6 +94,9 @@ class H5mdReader {
   BondRecord bond_record() const;
   std::vector<int> species() const;
   std::vector<double> mass() const;
+  std::vector<int> body() const;
+  /// 1 for particles a kinematic selection moves (0 for all in trajectories written before it was recorded).
+  std::vector<int> held() const;
   /// Observable time series by name (kinetic_energy, potential_energy, total_energy, boundary_work, ...).
   std::vector<double> observable(const std::string& name) const;
   double parameter(const std::string& name) const;

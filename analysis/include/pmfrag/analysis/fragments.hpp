@@ -5,6 +5,7 @@
 #pragma once
 
 #include "pmfrag/analysis/crack.hpp"
+#include "pmfrag/analysis/power_law.hpp"
 #include "pmfrag/h5md.hpp"
 
 #include <Eigen/Core>
@@ -56,7 +57,15 @@ struct FragmentReport {
   std::string criterion;
   std::vector<TimelineRow> timeline;
   std::vector<Fragment> final_fragments;  ///< sorted by mass, largest first
-  double total_mass = 0.0;
+  double total_mass = 0.0;       ///< g, of the bodies analysed (not of targets held in place)
+  long particles = 0;            ///< in the bodies analysed
+  long target_particles = 0;     ///< in bodies held in place entirely, left out
+  double second_largest_fraction = 0.0;  ///< of the total mass, at the last frame (0 if one piece)
+  /// n(m) ~ m^-tau of the final fragments (power_law.hpp); none, with the reason in distribution_note, when
+  /// too few fragments exist or the particles differ in mass
+  std::optional<PowerLawFit> distribution;
+  double particle_mass = 0.0;  ///< g, when every particle has the same mass (0 otherwise)
+  std::string distribution_note;
   double onset_time = -1.0;       ///< first frame with a broken bond (s)
   double separation_time = -1.0;  ///< first frame with >= 2 fragments each >= 5 % of the mass (s)
   long frames_read = 0;
@@ -130,7 +139,8 @@ double break_length(const H5mdReader& trajectory, const BreakCriterion& criterio
 /// or by distance if `distance` is given (or the trajectory has no record).
 FragmentReport analyse_fragments(const std::string& trajectory, const std::optional<BreakCriterion>& distance);
 
-/// Writes fragments_timeline.csv, fragments_final.csv, fragment_sizes.csv and summary.json into dir
+/// Writes fragments_timeline.csv, fragments_final.csv, fragment_sizes.csv (log-binned n(m)),
+/// fragment_mass_ccdf.csv (the cumulative distribution) and summary.json into dir
 /// (each written whole under a temporary name, then renamed).
 void write_fragment_report(const FragmentReport& report, const std::string& dir);
 
