@@ -13,6 +13,7 @@
 #include "pmfrag/sweep.hpp"
 #include "pmfrag/system.hpp"
 
+#include <nlohmann/json.hpp>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -32,6 +33,27 @@ namespace pmfrag::app {
 namespace {
 
 namespace fs = std::filesystem;
+
+// summary.json's piece counts and mass distribution as sweep.csv cells: fragments, single_particles,
+// second_largest_mass_fraction, tau, its interval, how many pieces it fitted and from what mass (empty where
+// the fit gave none, or the case has no summary).
+std::string distribution_cells(const std::string& summary) {
+  const nlohmann::json j = nlohmann::json::parse(summary, nullptr, false);
+  auto cell = [](const nlohmann::json& obj, const char* key) -> std::string {
+    if (!obj.is_object() || !obj.contains(key) || !obj[key].is_number()) return "";
+    char b[32];
+    std::snprintf(b, sizeof b, "%.6g", obj[key].get<double>());
+    return b;
+  };
+  std::string out = cell(j, "fragments") + "," + cell(j, "single_particles") + "," + cell(j, "second_largest_mass_fraction");
+  const nlohmann::json d = j.is_object() && j.contains("distribution") ? j["distribution"] : nlohmann::json();
+  const nlohmann::json ci = d.is_object() && d.contains("exponent_ci") ? d["exponent_ci"] : nlohmann::json();
+  const auto bound = [&](std::size_t k) {
+    return ci.is_array() && ci.size() == 2 ? cell(nlohmann::json{{"v", ci[k]}}, "v") : std::string();
+  };
+  return out + "," + cell(d, "exponent") + "," + bound(0) + "," + bound(1) + "," + cell(d, "fragments_fitted") + "," +
+         cell(d, "m_min_g");
+}
 
 struct SweepCli {
   std::string spec, out;
@@ -165,8 +187,12 @@ void sweep(const SweepCli& o) {
   const fs::path csv = fs::path(o.out) / "sweep.csv";
   {
     std::ofstream f(csv.string() + ".tmp");
-    f << "case,p,q,E_GPa,sigma_TS_MNm2,dt_s,onset_s,separation_s,fragments_2plus,fragments_1pct_mass,"
-         "largest_mass_fraction,particle_steps_per_s,wall_s,status\n";
+    // A column per varied key after (p,q); the mass distribution's exponent and its interval after the counts.
+    f << "case,p,q";
+    for (const auto& [key, values] : spec.vary) f << "," << key;
+    f << ",E_GPa,sigma_TS_MNm2,dt_s,onset_s,separation_s,fragments_2plus,fragments_1pct_mass,"
+         "largest_mass_fraction,fragments,single_particles,second_largest_mass_fraction,tau,tau_ci_low,tau_ci_high,"
+         "tau_fragments_fitted,tau_m_min_g,particle_steps_per_s,wall_s,status\n";
     long failed = 0;
     for (const auto& k : cases) {
       const fs::path dir = fs::path(o.out) / k.name;
@@ -187,11 +213,20 @@ void sweep(const SweepCli& o) {
         std::snprintf(b, sizeof b, "%.6g", v);
         return std::string(b);
       };
-      f << k.name << "," << k.p << "," << k.q << "," << val(m.E_GPa) << "," << val(m.sigma_TS_MNm2) << ","
+      f << k.name << "," << k.p << "," << k.q;
+      for (const auto& [key, values] : spec.vary)
+        for (const auto& item : k.overrides)
+          if (item.rfind(key + "=", 0) == 0) {
+            std::string v = item.substr(key.size() + 1);
+            for (char& ch : v)
+              if (ch == '"') ch = '\'';
+            f << ",\"" << v << "\"";
+          }
+      f << "," << val(m.E_GPa) << "," << val(m.sigma_TS_MNm2) << ","
         << val(json_number(run, "dt_s")) << "," << val(json_number(sum, "onset_time_s")) << ","
         << val(json_number(sum, "separation_time_s")) << "," << val(json_number(sum, "fragments_2plus")) << ","
         << val(json_number(sum, "fragments_1pct_mass")) << "," << val(json_number(sum, "largest_mass_fraction")) << ","
-        << val(json_number(run, "particle_steps_per_s")) << "," << val(json_number(run, "wall_s")) << ",\"" << status
+        << distribution_cells(sum) << "," << val(json_number(run, "particle_steps_per_s")) << "," << val(json_number(run, "wall_s")) << ",\"" << status
         << "\"\n";
     }
     std::printf("wrote %s: %zu cases, %ld failed\n", csv.c_str(), cases.size(), failed);
