@@ -20,6 +20,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <memory>
 #include <sstream>
 
@@ -257,61 +258,147 @@ void study_accuracy(const StudyCli& o) {
   std::printf("wrote %s and %s\n", csv.c_str(), png.c_str());
 }
 
-// `pmfrag study sweep-figures SWEEP_DIR`: onset and separation time, and fragment counts, against the
-// modulus E of each (p,q), from sweep.csv (E orders the pairs from soft to stiff, as in Fig. 3).
+// One CSV line's cells; a quoted cell may hold commas (sweep.csv quotes the varied values and the status).
+std::vector<std::string> csv_cells(const std::string& line) {
+  std::vector<std::string> cells(1);
+  bool quoted = false;
+  for (char c : line) {
+    if (c == '"')
+      quoted = !quoted;
+    else if (c == ',' && !quoted)
+      cells.emplace_back();
+    else
+      cells.back() += c;
+  }
+  return cells;
+}
+
+double cell_number(const std::string& text) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  return end != text.c_str() ? v : NAN;
+}
+
+// `pmfrag study sweep-figures SWEEP_DIR`: charts of sweep.csv. Over (p,q) alone: onset and separation time and
+// fragment counts against the modulus E of each (p,q) (E orders the pairs from soft to stiff, as in Fig. 3).
+// Over impact speeds (a varied impactor velocity): per (p,q), the pieces and the largest piece against the
+// speed, tau against the impact energy per unit mass, and n(m) of the fastest case of each law with its fit.
 void sweep_figures(const std::string& dir, const std::string& prefix) {
   const fs::path csv = fs::path(dir) / "sweep.csv";
   std::ifstream in(csv);
   if (!in) throw UsageError(csv.string() + ": not found (run `pmfrag sweep` first)");
   std::string header;
   std::getline(in, header);
-  std::vector<std::string> names;
-  {
-    std::stringstream hs(header);
-    for (std::string h; std::getline(hs, h, ',');) names.push_back(h);
-  }
+  const std::vector<std::string> names = csv_cells(header);
   auto column = [&](const std::string& name) {
     const auto it = std::find(names.begin(), names.end(), name);
     if (it == names.end()) throw std::runtime_error(csv.string() + ": no column '" + name + "'");
     return static_cast<std::size_t>(it - names.begin());
   };
-  const std::size_t cE = column("E_GPa"), cOn = column("onset_s"), cSep = column("separation_s"),
-                    cFr = column("fragments_2plus"), cSt = column("status");
-  struct Point {
-    double E, onset, sep, frags;
-  };
-  std::vector<Point> pts;
+  const std::size_t cSt = column("status");
+  std::vector<std::vector<std::string>> rows;
   long skipped = 0;
   for (std::string line; std::getline(in, line);) {
-    std::vector<std::string> cells;
-    std::stringstream ls(line);
-    for (std::string c; std::getline(ls, c, ',');) cells.push_back(c);
-    if (cells.size() <= cSt || cells[cSt].find("completed") == std::string::npos) {
+    auto cells = csv_cells(line);
+    if (cells.size() != names.size() || cells[cSt].find("completed") == std::string::npos) {
       ++skipped;
       continue;
     }
-    pts.push_back({std::stod(cells[cE]), std::stod(cells[cOn]), std::stod(cells[cSep]), std::stod(cells[cFr])});
+    rows.push_back(std::move(cells));
   }
-  std::sort(pts.begin(), pts.end(), [](const Point& a, const Point& b) { return a.E < b.E; });
-  render::Series onset{"first broken bond", {}, {}}, sep{"separation (2 pieces >= 5 % of the mass)", {}, {}},
-      frags{"fragments of >= 2 particles", {}, {}};
-  for (const auto& p : pts) {
-    if (p.onset > 0) onset.x.push_back(p.E), onset.y.push_back(p.onset * 1e3);
-    if (p.sep > 0) sep.x.push_back(p.E), sep.y.push_back(p.sep * 1e3);
-    frags.x.push_back(p.E), frags.y.push_back(p.frags);
-  }
+  const auto num = [&](const std::vector<std::string>& r, const std::string& name) { return cell_number(r[column(name)]); };
   render::HeadlessWindow window(1000, 650);
-  const std::string times_png = prefix + "_times.png", frags_png = prefix + "_fragments.png";
-  render::render_chart_png(window,
-                           {"Slit plate over (p,q): when it breaks (" + std::to_string(pts.size()) + " pairs)",
-                            "Young's modulus E [GPa] of the (p,q) material", "time [ms]", false, false, {onset, sep}},
-                           1000, 650, times_png);
-  render::render_chart_png(window,
-                           {"Slit plate over (p,q): fragments at the end", "Young's modulus E [GPa] of the (p,q) material",
-                            "fragments", false, false, {frags}},
-                           1000, 650, frags_png);
-  std::printf("wrote %s and %s from %zu completed cases (%ld not completed, left out)\n", times_png.c_str(),
-              frags_png.c_str(), pts.size(), skipped);
+  std::vector<std::string> written;
+  auto chart = [&](const std::string& suffix, render::ChartSpec spec) {
+    const std::string png = prefix + suffix;
+    render::render_chart_png(window, spec, 1000, 650, png);
+    written.push_back(png);
+  };
+
+  if (std::find(names.begin(), names.end(), "impactor.0.velocity") != names.end()) {
+    const std::size_t cV = column("impactor.0.velocity");
+    const auto speed = [&](const std::vector<std::string>& r) {  // |v| [m/s] from "[vx, vy(, vz)]" in cm/s
+      std::string t = r[cV];
+      for (char& c : t)
+        if (c == '[' || c == ']' || c == ',') c = ' ';
+      std::stringstream ss(t);
+      double v2 = 0.0;
+      for (double c; ss >> c;) v2 += c * c;
+      return std::sqrt(v2) / 100.0;
+    };
+    std::map<std::pair<int, int>, std::vector<const std::vector<std::string>*>> by_law;
+    for (const auto& r : rows) by_law[{static_cast<int>(num(r, "p")), static_cast<int>(num(r, "q"))}].push_back(&r);
+    std::vector<render::Series> pieces, largest, tau, nm;
+    for (auto& [pq, list] : by_law) {
+      std::sort(list.begin(), list.end(), [&](auto* a, auto* b) { return speed(*a) < speed(*b); });
+      const std::string law = "(" + std::to_string(pq.first) + "," + std::to_string(pq.second) + ")";
+      render::Series n{law, {}, {}}, big{law, {}, {}}, t{law, {}, {}, true};
+      for (const auto* r : list) {
+        const double v = speed(*r);
+        n.x.push_back(v), n.y.push_back(num(*r, "fragments_2plus"));
+        big.x.push_back(v), big.y.push_back(num(*r, "largest_mass_fraction"));
+        if (std::isfinite(num(*r, "tau"))) t.x.push_back(0.5 * std::pow(100.0 * v, 2)), t.y.push_back(num(*r, "tau"));
+      }
+      pieces.push_back(n), largest.push_back(big), tau.push_back(t);
+      // n(m) of this law's fastest case with a fit, from its fragment_sizes.csv, and the fitted slope
+      for (auto it = list.rbegin(); it != list.rend(); ++it) {
+        const double exponent = num(**it, "tau"), m_min = num(**it, "tau_m_min_g");
+        if (!std::isfinite(exponent)) continue;
+        std::ifstream sizes(fs::path(dir) / (**it)[column("case")] / "fragment_sizes.csv");
+        std::string line;
+        std::getline(sizes, line);
+        render::Series data{law + " at " + std::to_string(static_cast<long>(speed(**it))) + " m/s", {}, {}, true};
+        for (; std::getline(sizes, line);) {
+          const auto c = csv_cells(line);
+          if (c.size() < 5 || cell_number(c[2]) <= 0) continue;
+          data.x.push_back(std::sqrt(cell_number(c[0]) * cell_number(c[1])));  // the bin's geometric centre
+          data.y.push_back(cell_number(c[4]));
+        }
+        if (data.x.empty()) break;
+        // the law through the data at the first bin at or above m_min
+        std::size_t k = 0;
+        while (k + 1 < data.x.size() && data.x[k] < m_min) ++k;
+        char label[64];
+        std::snprintf(label, sizeof label, "%s fit: tau = %.2f", law.c_str(), exponent);
+        render::Series fit{label, {}, {}};
+        for (double m = data.x[k]; m <= data.x.back() * 1.01; m *= 1.5)
+          fit.x.push_back(m), fit.y.push_back(data.y[k] * std::pow(m / data.x[k], -exponent));
+        nm.push_back(data), nm.push_back(fit);
+        break;
+      }
+    }
+    const std::string where = " (" + std::to_string(rows.size()) + " cases)";
+    chart("_impact_pieces.png", {"Pieces of >= 2 particles against impact speed" + where, "impact speed [m/s]",
+                                 "pieces of >= 2 particles", true, true, pieces});
+    chart("_impact_largest.png", {"Largest piece against impact speed: the transition" + where, "impact speed [m/s]",
+                                  "largest piece [fraction of the mass]", true, false, largest});
+    chart("_impact_tau.png", {"Mass exponent tau of n(m) ~ m^-tau against impact energy" + where,
+                              "impact energy per unit mass v^2/2 [erg/g]", "tau (maximum likelihood)", true, false, tau});
+    if (!nm.empty())
+      chart("_impact_nm.png", {"Fragment mass distribution n(m), fastest case of each law", "fragment mass m [g]",
+                               "n(m) [fragments per g]", true, true, nm});
+  } else {
+    std::vector<const std::vector<std::string>*> by_e;
+    for (const auto& r : rows) by_e.push_back(&r);
+    std::sort(by_e.begin(), by_e.end(), [&](auto* a, auto* b) { return num(*a, "E_GPa") < num(*b, "E_GPa"); });
+    render::Series onset{"first broken bond", {}, {}}, sep{"separation (2 pieces >= 5 % of the mass)", {}, {}},
+        frags{"fragments of >= 2 particles", {}, {}, true};
+    for (const auto* r : by_e) {
+      const double E = num(*r, "E_GPa");
+      if (num(*r, "onset_s") > 0) onset.x.push_back(E), onset.y.push_back(num(*r, "onset_s") * 1e3);
+      if (num(*r, "separation_s") > 0) sep.x.push_back(E), sep.y.push_back(num(*r, "separation_s") * 1e3);
+      frags.x.push_back(E), frags.y.push_back(num(*r, "fragments_2plus"));
+    }
+    chart("_times.png", {"Slit plate over (p,q): when it breaks (" + std::to_string(rows.size()) + " pairs)",
+                         "Young's modulus E [GPa] of the (p,q) material", "time [ms]", false, false, {onset, sep}});
+    render::ChartSpec counts{"Slit plate over (p,q): pieces at the end", "Young's modulus E [GPa] of the (p,q) material",
+                             "pieces of >= 2 particles", false, false, {frags}};
+    counts.integer_y = true;
+    chart("_fragments.png", counts);
+  }
+  std::string list;
+  for (const auto& w : written) list += (list.empty() ? "" : ", ") + w;
+  std::printf("wrote %s from %zu completed cases (%ld not completed, left out)\n", list.c_str(), rows.size(), skipped);
 }
 
 }  // namespace
@@ -333,9 +420,9 @@ void add_study_command(CLI::App& app) {
   acc->add_option("--threads", o->threads, "OpenMP threads per run (default: all cores)");
   acc->callback([o] { study_accuracy(*o); });
   auto dir = std::make_shared<std::pair<std::string, std::string>>();
-  auto* fig = study->add_subcommand("sweep-figures", "Charts of a sweep: break times and fragment counts against E");
+  auto* fig = study->add_subcommand("sweep-figures", "Charts of a sweep: over (p,q), break times and pieces against E; over impact speeds, pieces, the largest piece and tau against speed, n(m)");
   fig->add_option("sweep_dir", dir->first, "Folder holding sweep.csv")->required();
-  fig->add_option("--prefix", dir->second, "PNG path prefix (default SWEEP_DIR/sweep): PREFIX_times.png, PREFIX_fragments.png");
+  fig->add_option("--prefix", dir->second, "PNG path prefix (default SWEEP_DIR/sweep): PREFIX_times.png, PREFIX_fragments.png or PREFIX_impact_*.png");
   fig->callback([dir] { sweep_figures(dir->first, dir->second.empty() ? dir->first + "/sweep" : dir->second); });
   add_study_figures_command(*study);
   add_study_modulus_command(*study);

@@ -98,11 +98,11 @@ void render_chart_png(HeadlessWindow& window, const ChartSpec& spec, int w, int 
       ys->InsertNextValue(v);
       lo[0] = std::min(lo[0], u), hi[0] = std::max(hi[0], u), lo[1] = std::min(lo[1], v), hi[1] = std::max(hi[1], v);
     }
-    if (xs->GetNumberOfTuples() < 2) continue;  // a curve needs two points
+    if (xs->GetNumberOfTuples() < (ser.markers ? 1 : 2)) continue;  // a curve needs two points
     table->AddColumn(xs);
     table->AddColumn(ys);
     keep.push_back(table);
-    vtkPlot* plot = chart->AddPlot(vtkChart::LINE);
+    vtkPlot* plot = chart->AddPlot(ser.markers ? vtkChart::POINTS : vtkChart::LINE);
     plot->SetInputData(table, 0, 1);
     const auto& c = palette[s % palette.size()];
     plot->SetColor(c[0], c[1], c[2], 255);
@@ -115,8 +115,29 @@ void render_chart_png(HeadlessWindow& window, const ChartSpec& spec, int w, int 
   vtkAxis* axes[2] = {x, y};
   const bool logs[2] = {spec.log_x, spec.log_y};
   for (int a = 0; a < 2; ++a) {
-    if (!logs[a] || !(hi[a] >= lo[a])) continue;
-    const double from = std::floor(lo[a]), to = std::ceil(hi[a]);
+    if (!(hi[a] >= lo[a])) continue;
+    if (!logs[a]) {
+      // Linear: a margin of 6 % so that no point sits on the frame (or under the title and legend, 12 % on y).
+      const double span = hi[a] > lo[a] ? hi[a] - lo[a] : std::max(1.0, std::fabs(hi[a]));
+      double from = lo[a] - 0.06 * span, to = hi[a] + (a == 1 ? 0.12 : 0.06) * span;
+      if (a == 1 && spec.integer_y) {
+        // whole-number ticks, about eight of them
+        const double step = std::max(1.0, std::ceil((to - from) / 8.0));
+        from = std::floor(from), to = std::ceil(to);
+        vtkNew<vtkDoubleArray> ticks;
+        vtkNew<vtkStringArray> labels;
+        for (double t = std::ceil(from / step) * step; t <= to; t += step) {
+          ticks->InsertNextValue(t);
+          labels->InsertNextValue(std::to_string(static_cast<long>(t)));
+        }
+        axes[a]->SetCustomTickPositions(ticks, labels);
+      }
+      axes[a]->SetBehavior(vtkAxis::FIXED);
+      axes[a]->SetRange(from, to);
+      continue;
+    }
+    // whole decades, with room so that no point sits on the frame
+    const double from = std::floor(lo[a] - 0.03), to = std::ceil(hi[a] + 0.03);
     vtkNew<vtkDoubleArray> ticks;
     vtkNew<vtkStringArray> labels;
     for (double d = from; d <= to + 0.5; d += 1.0) {

@@ -12,12 +12,14 @@ namespace pmfrag::render {
 struct Series {
   std::string name;
   std::vector<double> x, y;
+  bool markers = false;  ///< points only, no line between them (counts, separate cases)
 };
 
 struct ChartSpec {
   std::string title, x_label, y_label;
   bool log_x = false, log_y = false;
   std::vector<Series> series;
+  bool integer_y = false;  ///< a count: ticks at whole numbers only (linear y)
 };
 
 /// Renders `chart` at w x h pixels into `png_path` (written to a temporary name and renamed). Points with a
