@@ -21,4 +21,7 @@ done
 "$pmfrag" run cases/inclusion.toml --out "$work/inclusion" --force -q > /dev/null
 "$pmfrag" render "$work/inclusion" --no-frames --field phase --panel 0,0.6,0.8,1 --size 800 \
   --panel-out gallery/inclusion_phase.png
+"$pmfrag" run cases/disc_wall_impact.toml --out "$work/disc_wall_impact" --force -q > /dev/null
+"$pmfrag" render "$work/disc_wall_impact" --no-frames --field fragment_id --panel 0,0.1,0.3,1 --size 800 \
+  --panel-out gallery/disc_wall_impact_fragments.png
 ls -l gallery/*.png

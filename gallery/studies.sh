@@ -26,7 +26,7 @@ case "${1:-}" in
     "$pmfrag" sweep cases/sweep_impact.toml --out out/sweep_impact
     echo "sweep wall time: $(( $(date +%s) - start )) s"
     cp out/sweep_impact/sweep.csv gallery/sweep_impact.csv
-    "$pmfrag" study sweep-figures out/sweep_impact --prefix gallery/sweep_impact
+    "$pmfrag" study sweep-figures out/sweep_impact --prefix gallery/sweep
     ;;
   figures)
     "$pmfrag" study figures --out gallery

@@ -39,4 +39,15 @@ bad "malformed r0" --r0 material --r0 abc
 bad "malformed block" --block material --block 8,11
 bad "unknown option" --frobnicate material --frobnicate
 bad "no subcommand" subcommand
+
+# A run whose adaptive step would fall below 1e-6 of its cap stops at once, keeps a checkpoint, and what reads
+# the trajectory says it is partial (here forced by a safety factor of 1e-8).
+src=$(cd "$(dirname "$0")/.." && pwd)
+work=$(mktemp -d)
+bad "adaptive step collapsed" "collapsed" run "$src/cases/impact.toml" --out "$work/c" -q --set time.safety=1e-8 \
+  --set time.dt_max=1e-7 --set time.end=1e-5
+check "the collapsed run keeps a checkpoint and says it did not complete" \
+  "[ -f '$work/c/checkpoint.h5' ] && grep -q '\"completed\": false' '$work/c/run.json'"
+check "fragments of the collapsed run say PARTIAL" "\"$pmfrag\" fragments '$work/c' | grep -q 'PARTIAL' && grep -q '\"partial\": true' '$work/c/summary.json'"
+rm -rf "$work"
 exit $fail

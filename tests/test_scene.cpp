@@ -170,3 +170,36 @@ TEST(Scene, SelectionsAndRegionsThatSelectNothingAreRefused) {
   holes.bodies[0].holes.push_back(everything);
   EXPECT_THROW(build_system(holes), SceneError);
 }
+
+TEST(Scene, ATargetOverlappingTheBodyIsRefusedNamingBoth) {
+  const std::string two = R"(
+[[body]]
+name = "disc"
+lattice = "triangular"
+shape = { kind = "disc", center = [0.0, 1.0], radius = 1.0 }
+[[body]]
+name = "wall"
+lattice = "triangular"
+shape = { kind = "rect", min = [-3.0, -0.5], max = [3.0, 0.3] }
+[[phase]]
+p = 7
+q = 14
+[pair]
+[[kinematic]]
+select = { body = "wall" }
+velocity = [0.0, 0.0]
+[time]
+dt = 1e-7
+end = 1e-6
+)";
+  try {
+    (void)build_system(parse_scene(two, "overlap.toml"));
+    FAIL() << "expected an error";
+  } catch (const SceneError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("bodies 'disc' and 'wall' overlap"), std::string::npos) << what;
+    EXPECT_NE(what.find("overlap.toml"), std::string::npos) << what;
+  }
+  // moved clear of each other, the same scene builds
+  EXPECT_NO_THROW((void)build_system(parse_scene(two, "clear.toml", {"body.0.shape.center=[0.0, 1.6]"})));
+}

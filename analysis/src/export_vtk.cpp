@@ -199,6 +199,8 @@ ExportResult export_vtk(const std::string& run_dir, const ExportOptions& opt) {
   H5mdReader rd((dir / "trajectory.h5").string());
   ExportResult res;
   if (!rd.damage().empty()) res.partial = true, res.note = "trajectory " + rd.damage();
+  if (const std::string why = rd.incomplete(); !why.empty())
+    res.partial = true, res.note += std::string(res.note.empty() ? "" : "; ") + "the run " + why;
   Static st;
   st.n = rd.particles();
   st.dim = rd.dim();

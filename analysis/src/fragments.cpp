@@ -223,6 +223,8 @@ FragmentReport analyse_fragments(const std::string& trajectory, const std::optio
   H5mdReader rd(trajectory);
   FragmentReport rep;
   if (!rd.damage().empty()) rep.partial = true, rep.note = "trajectory " + rd.damage();
+  if (const std::string why = rd.incomplete(); !why.empty())
+    rep.partial = true, rep.note += std::string(rep.note.empty() ? "" : "; ") + "the run " + why;
   BondStates states = BondStates::open(rd, distance);
   rep.bond_state = states.source();
   rep.threshold_cm = states.threshold_cm();

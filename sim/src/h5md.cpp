@@ -341,6 +341,8 @@ H5mdWriter::H5mdWriter(const std::string& path, long keep_frames, long keep_even
   }
   m.rows_at_frame = Series::reopen(m.record, "rows_at_frame", H5T_NATIVE_LONG, keep);
   events_ = keep_events;
+  if (H5Lexists(m.file, "/parameters/incomplete", H5P_DEFAULT) > 0)  // resumed: no longer short of its end
+    H5Ldelete(m.file, "/parameters/incomplete", H5P_DEFAULT);
   m.particles = checked(H5Gopen2(m.file, "/particles/all", H5P_DEFAULT), "particles");
   m.position = Series::reopen(m.particles, "position", H5T_NATIVE_DOUBLE, keep);
   m.velocity = Series::reopen(m.particles, "velocity", H5T_NATIVE_DOUBLE, keep);
@@ -395,6 +397,14 @@ void H5mdWriter::append_bond_events(const std::vector<BondEvent>& events) {
 }
 
 void H5mdWriter::flush() { check(H5Fflush(impl_->file, H5F_SCOPE_GLOBAL), "flush"); }
+
+void H5mdWriter::mark_incomplete(const std::string& why) {
+  hid_t par = checked(H5Gopen2(impl_->file, "/parameters", H5P_DEFAULT), "parameters");
+  if (H5Lexists(par, "incomplete", H5P_DEFAULT) > 0) H5Ldelete(par, "incomplete", H5P_DEFAULT);
+  string_dataset(par, "incomplete", why);
+  H5Gclose(par);
+  flush();
+}
 
 void H5mdWriter::close() {
   if (!impl_ || impl_->file < 0) return;
@@ -703,6 +713,9 @@ std::string read_string(hid_t file, const char* path) {
 }  // namespace
 
 std::string H5mdReader::scene_text() const { return read_string(file_, "/parameters/scene"); }
+std::string H5mdReader::incomplete() const {
+  return H5Lexists(file_, "/parameters/incomplete", H5P_DEFAULT) > 0 ? read_string(file_, "/parameters/incomplete") : "";
+}
 
 void write_checkpoint(const std::string& path, const Checkpoint& c) {
   const std::string tmp = path + ".tmp";

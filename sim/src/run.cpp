@@ -137,9 +137,13 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
         try {
           h = levels.next(allowed);
         } catch (const std::runtime_error&) {
-          throw GuardError("adaptive step collapsed (the limit at the closest approach is " + fmt("%.3g", allowed) +
-                               " s) at t = " + fmt("%.6g", lf.state().t) +
-                               " s: particles are pressed together with no r_min clamp; set pair.r_min",
+          // The state is whole (this step is not taken): keep it in a checkpoint, as an interrupted run does.
+          lf.canonicalize();
+          checkpoint();
+          throw GuardError("adaptive step collapsed: the limit at the closest approach is " + fmt("%.3g", allowed) +
+                               " s, below 1e-6 of the cap " + fmt("%.3g", dt) + " s, at t = " + fmt("%.6g", lf.state().t) +
+                               " s (particles pressed to the stiffest part of the law: a lower speed, or a larger "
+                               "pair.r_min); a checkpoint is kept at this step",
                            lf.state().step, lf.state().t, -1);
         }
         const double to_out = std::min(static_cast<double>(writer.frames()) * every_s, end) - lf.state().t;
@@ -190,6 +194,8 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
     res.completed = false;
     res.message = e.what();
   }
+  // What reads the trajectory says it is partial until a resume completes it.
+  if (!res.completed) writer.mark_incomplete(res.interrupted ? res.message : "stopped: " + res.message);
   res.wall_s = std::chrono::duration<double>(clock::now() - t0).count();
   res.steps = lf.state().step;
   res.dt_min = dt_min_taken;

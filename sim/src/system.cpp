@@ -139,10 +139,19 @@ System build_system(const Scene& sc) {
   CellList<3> cells;
   const double bond_reach = 1.2 * sys.r0;
   cells.for_each_pair(sys.position, bond_reach, [&](std::uint32_t i, std::uint32_t j, double r2) {
+    if (sys.body[i] != sys.body[j]) {
+      // Two bodies closer than a lattice allows (a target placed across the body that strikes it) would start
+      // with contact forces of the stiffest part of the law.
+      if (r2 < 0.64 * sys.r0 * sys.r0)
+        throw SceneError(sc.file + ": bodies '" + sys.body_names[static_cast<std::size_t>(sys.body[i])] + "' and '" +
+                         sys.body_names[static_cast<std::size_t>(sys.body[j])] + "' overlap at t = 0: particles " +
+                         std::to_string(i) + " and " + std::to_string(j) + " are " + std::to_string(std::sqrt(r2)) +
+                         " cm apart (less than 0.8 r0 = " + std::to_string(0.8 * sys.r0) + " cm); move one of them");
+      return;
+    }
     if (r2 < 0.25 * sys.r0 * sys.r0)
       throw SceneError(sc.file + ": particles " + std::to_string(i) + " and " + std::to_string(j) + " overlap (" +
                        std::to_string(std::sqrt(r2)) + " cm apart, r0 = " + std::to_string(sys.r0) + " cm)");
-    if (sys.body[i] != sys.body[j]) return;
     const auto& slits = sc.bodies[static_cast<std::size_t>(sys.body[i])].slits;
     for (const auto& s : slits)
       if (s.crossed_by(sys.position[i], sys.position[j])) return;

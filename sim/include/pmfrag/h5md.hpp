@@ -41,6 +41,8 @@ class H5mdWriter {
   void append_bond_events(const std::vector<BondEvent>& events);
   /// Writes everything appended so far to disk (write_frame does it too).
   void flush();
+  /// Records that the run ended before its end time, and why (/parameters/incomplete); a resume removes it.
+  void mark_incomplete(const std::string& why);
   long frames() const { return frames_; }
   long bond_event_rows() const { return events_; }
   void close();
@@ -104,6 +106,8 @@ class H5mdReader {
   std::vector<PairLaw> laws() const;
   std::vector<int> phase_pair_law() const;
   std::string scene_text() const;
+  /// Why the run ended before its end time ("" if it did not, or has been resumed to the end).
+  std::string incomplete() const;
 
  private:
   long long file_ = -1;
