@@ -239,14 +239,7 @@ H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& 
   array_dataset(m.particles, "id", ids, {n});
   array_dataset(m.particles, "mass", mass, {n});
   array_dataset(m.particles, "body", sys.body, {n});
-  {
-    // 1 for particles whose motion a kinematic selection prescribes (pulled rows, a target held in place)
-    std::vector<int> held(n, 0);
-    for (std::size_t k = 0; k < scene.kinematic.size(); ++k)
-      for (int i : select_particles(sys, scene.kinematic[k].select, "kinematic"))
-        held[static_cast<std::size_t>(i)] = 1;
-    array_dataset(m.particles, "held", held, {n});
-  }
+  if (sys.held.size() == n) array_dataset(m.particles, "held", sys.held, {n});
   array_dataset(m.particles, "site", sys.site, {n});
 
   hid_t conn = make_group(m.file, "connectivity");

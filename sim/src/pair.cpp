@@ -250,7 +250,8 @@ class PairEffect final : public Effect<D> {
 
   // The cutoff model's potential is shifted to zero at D (phi(r) - phi(D) for each pair within D): the force is
   // unchanged, and the energy no longer jumps by phi(D) each time a pair crosses D, so kinetic + potential
-  // - boundary work stays a conservation check (unshifted, the 3-D block's fell by 5.4e10 erg in 1e-4 s).
+  // - boundary work stays a conservation check (unshifted, the 3-D block's balance was off by up to 20 times
+  // its kinetic energy within 1e-4 s: docs/physics.md, "Two readings").
   // pairs_beyond_cutoff is counted from the distances here, apart from the record of crossings.
   void observe(const State<D>& s, Observables& o) const override {
     double pe = 0.0;

@@ -164,6 +164,11 @@ System build_system(const Scene& sc) {
     const auto idx = select_particles(sys, Selection{Selection::Kind::body, {}, im.body}, "impactor");
     for (int i : idx) sys.velocity[static_cast<std::size_t>(i)] = im.velocity;
   }
+  // Particles a kinematic selection will move (the effect is built from the same selection).
+  sys.held.assign(sys.size(), 0);
+  for (std::size_t k = 0; k < sc.kinematic.size(); ++k)
+    for (int i : select_particles(sys, sc.kinematic[k].select, "kinematic[" + std::to_string(k) + "].select"))
+      sys.held[static_cast<std::size_t>(i)] = 1;
   return sys;
 }
 
