@@ -347,7 +347,8 @@ void sweep_figures(const std::string& dir, const std::string& prefix) {
         std::ifstream sizes(fs::path(dir) / (**it)[column("case")] / "fragment_sizes.csv");
         std::string line;
         std::getline(sizes, line);
-        render::Series data{law + " at " + std::to_string(static_cast<long>(speed(**it))) + " m/s", {}, {}, true};
+        const int colour = static_cast<int>(pieces.size()) - 1;  // this law's colour in the other charts
+        render::Series data{law + " at " + std::to_string(static_cast<long>(speed(**it))) + " m/s", {}, {}, true, colour};
         for (; std::getline(sizes, line);) {
           const auto c = csv_cells(line);
           if (c.size() < 5 || cell_number(c[2]) <= 0) continue;
@@ -360,7 +361,7 @@ void sweep_figures(const std::string& dir, const std::string& prefix) {
         while (k + 1 < data.x.size() && data.x[k] < m_min) ++k;
         char label[64];
         std::snprintf(label, sizeof label, "%s fit: tau = %.2f", law.c_str(), exponent);
-        render::Series fit{label, {}, {}};
+        render::Series fit{label, {}, {}, false, colour};
         for (double m = data.x[k]; m <= data.x.back() * 1.01; m *= 1.5)
           fit.x.push_back(m), fit.y.push_back(data.y[k] * std::pow(m / data.x[k], -exponent));
         nm.push_back(data), nm.push_back(fit);

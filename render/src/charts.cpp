@@ -104,7 +104,7 @@ void render_chart_png(HeadlessWindow& window, const ChartSpec& spec, int w, int 
     keep.push_back(table);
     vtkPlot* plot = chart->AddPlot(ser.markers ? vtkChart::POINTS : vtkChart::LINE);
     plot->SetInputData(table, 0, 1);
-    const auto& c = palette[s % palette.size()];
+    const auto& c = palette[static_cast<std::size_t>(ser.colour >= 0 ? ser.colour : static_cast<int>(s)) % palette.size()];
     plot->SetColor(c[0], c[1], c[2], 255);
     plot->SetWidth(2.5);
     if (auto* pts = vtkPlotPoints::SafeDownCast(plot)) {

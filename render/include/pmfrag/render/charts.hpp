@@ -13,6 +13,7 @@ struct Series {
   std::string name;
   std::vector<double> x, y;
   bool markers = false;  ///< points only, no line between them (counts, separate cases)
+  int colour = -1;       ///< index into the palette (-1: the series' own position), to pair data with its fit
 };
 
 struct ChartSpec {
