@@ -369,14 +369,14 @@ void sweep_figures(const std::string& dir, const std::string& prefix) {
       }
     }
     const std::string where = " (" + std::to_string(rows.size()) + " cases)";
-    chart("_impact_pieces.png", {"Pieces of >= 2 particles against impact speed" + where, "impact speed [m/s]",
+    chart("_pieces.png", {"Pieces of >= 2 particles against impact speed" + where, "impact speed [m/s]",
                                  "pieces of >= 2 particles", true, true, pieces});
-    chart("_impact_largest.png", {"Largest piece against impact speed: the transition" + where, "impact speed [m/s]",
+    chart("_largest.png", {"Largest piece against impact speed: the transition" + where, "impact speed [m/s]",
                                   "largest piece [fraction of the mass]", true, false, largest});
-    chart("_impact_tau.png", {"Mass exponent tau of n(m) ~ m^-tau against impact energy" + where,
+    chart("_tau.png", {"Mass exponent tau of n(m) ~ m^-tau against impact energy" + where,
                               "impact energy per unit mass v^2/2 [erg/g]", "tau (maximum likelihood)", true, false, tau});
     if (!nm.empty())
-      chart("_impact_nm.png", {"Fragment mass distribution n(m), fastest case of each law", "fragment mass m [g]",
+      chart("_nm.png", {"Fragment mass distribution n(m), fastest case of each law", "fragment mass m [g]",
                                "n(m) [fragments per g]", true, true, nm});
   } else {
     std::vector<const std::vector<std::string>*> by_e;
@@ -423,7 +423,7 @@ void add_study_command(CLI::App& app) {
   auto dir = std::make_shared<std::pair<std::string, std::string>>();
   auto* fig = study->add_subcommand("sweep-figures", "Charts of a sweep: over (p,q), break times and pieces against E; over impact speeds, pieces, the largest piece and tau against speed, n(m)");
   fig->add_option("sweep_dir", dir->first, "Folder holding sweep.csv")->required();
-  fig->add_option("--prefix", dir->second, "PNG path prefix (default SWEEP_DIR/sweep): PREFIX_times.png, PREFIX_fragments.png or PREFIX_impact_*.png");
+  fig->add_option("--prefix", dir->second, "PNG path prefix (default SWEEP_DIR/sweep): PREFIX_times.png, PREFIX_fragments.png, or over impact speeds PREFIX_{pieces,largest,tau,nm}.png");
   fig->callback([dir] { sweep_figures(dir->first, dir->second.empty() ? dir->first + "/sweep" : dir->second); });
   add_study_figures_command(*study);
   add_study_modulus_command(*study);

@@ -8,26 +8,23 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/build > /dev/null
 pmfrag=build/app/pmfrag
+# sweep NAME: cases/sweep_NAME.toml into out/sweep_NAME, its sweep.csv and charts into gallery/
+sweep() {
+  local start
+  start=$(date +%s)
+  "$pmfrag" sweep "cases/sweep_$1.toml" --out "out/sweep_$1"
+  echo "sweep wall time: $(( $(date +%s) - start )) s"
+  cp "out/sweep_$1/sweep.csv" "gallery/sweep_$1.csv"
+  "$pmfrag" study sweep-figures "out/sweep_$1" --prefix "gallery/sweep_$1"
+}
 case "${1:-}" in
   accuracy)
     "$pmfrag" study accuracy cases/slit_plate_rect_7_14.toml --out out/accuracy --set time.end=1.6e-2 \
       --knobs dt,r0,precision --png gallery/accuracy_pareto.png
     cp out/accuracy/accuracy.csv gallery/accuracy.csv
     ;;
-  sweep)
-    start=$(date +%s)
-    "$pmfrag" sweep cases/sweep_pq.toml --out out/sweep_pq
-    echo "sweep wall time: $(( $(date +%s) - start )) s"
-    cp out/sweep_pq/sweep.csv gallery/sweep_pq.csv
-    "$pmfrag" study sweep-figures out/sweep_pq --prefix gallery/sweep_pq
-    ;;
-  impact)
-    start=$(date +%s)
-    "$pmfrag" sweep cases/sweep_impact.toml --out out/sweep_impact
-    echo "sweep wall time: $(( $(date +%s) - start )) s"
-    cp out/sweep_impact/sweep.csv gallery/sweep_impact.csv
-    "$pmfrag" study sweep-figures out/sweep_impact --prefix gallery/sweep
-    ;;
+  sweep) sweep pq ;;
+  impact) sweep impact ;;
   figures)
     "$pmfrag" study figures --out gallery
     ;;
