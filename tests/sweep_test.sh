@@ -20,5 +20,23 @@ grep -q '^p7_q14,7,14,150.706,' "$work/s/sweep.csv" || { echo "FAIL: (7,14) row 
   > "$work/out3" 2>&1 || { cat "$work/out3"; echo "FAIL: a failing case stopped the sweep"; fail=1; }
 grep -q '^p1_q2,.*"completed"' "$work/f/sweep.csv" || { echo "FAIL: (1,2) should complete"; fail=1; }
 grep -q '^p7_q14,.*exceeds the stability limit' "$work/f/sweep.csv" || { cat "$work/f/sweep.csv"; echo "FAIL: (7,14) error not recorded"; fail=1; }
-[ $fail -eq 0 ] && echo "sweep: csv, skip on rerun and failure recording work"
+# A varied key (the impact speed) gets a column of its own after (p,q), its values quoted; the pieces and the
+# mass exponent follow; sweep-figures draws the impact charts from it.
+cat > "$work/impact.toml" <<EOF
+base = "$src/cases/disc_wall_impact.toml"
+pairs = [[7, 14]]
+[set]
+"time.end" = 2e-5
+"output.every" = 1e-5
+[vary]
+"impactor.0.velocity" = [[0.0, -50000.0], [0.0, -100000.0]]
+EOF
+"$pmfrag" sweep "$work/impact.toml" --out "$work/i" > "$work/out4" 2>&1 || { cat "$work/out4"; echo "FAIL: impact sweep"; fail=1; }
+head -1 "$work/i/sweep.csv" | grep -q '^case,p,q,impactor.0.velocity,E_GPa,.*,tau,tau_ci_low,tau_ci_high,tau_fragments_fitted,tau_m_min_g,.*,status$' \
+  || { head -1 "$work/i/sweep.csv"; echo "FAIL: impact sweep.csv header"; fail=1; }
+[ "$(grep -c '^p7_q14_.*,7,14,"\[ 0.0, -[0-9]*.0 \]",150.706,.*"completed"$' "$work/i/sweep.csv")" -eq 2 ] \
+  || { cat "$work/i/sweep.csv"; echo "FAIL: impact sweep.csv rows"; fail=1; }
+"$pmfrag" study sweep-figures "$work/i" > "$work/out5" 2>&1 && [ -s "$work/i/sweep_pieces.png" ] && [ -s "$work/i/sweep_largest.png" ] \
+  || { cat "$work/out5"; echo "FAIL: impact sweep charts"; fail=1; }
+[ $fail -eq 0 ] && echo "sweep: csv, skip on rerun, failure recording, varied keys and their charts work"
 exit $fail
