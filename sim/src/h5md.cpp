@@ -182,6 +182,7 @@ const char* const observable_names[] = {"kinetic_energy", "potential_energy", "t
 
 struct H5mdWriter::Impl {
   hid_t file = -1;
+  std::string part, path;  ///< the temporary name until the first frame is written, and the final one
   hid_t particles = -1;
   hid_t record = -1;                        ///< /connectivity/broken_bonds
   hid_t columns[4] = {-1, -1, -1, -1};      ///< its step, time, bond, re_formed
@@ -194,9 +195,10 @@ struct H5mdWriter::Impl {
 H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& scene, const RunParameters& run)
     : impl_(std::make_unique<Impl>()) {
   auto& m = *impl_;
-  // Created under a temporary name and renamed once its metadata is on disk: a trajectory.h5 that exists
-  // is always readable, even if the run is killed at once.
+  // Created under a temporary name and renamed once its metadata and first frame are on disk (write_frame): a
+  // trajectory.h5 that exists holds at least one whole frame, even if the run is killed at once.
   const std::string part = path + ".part";
+  m.part = part, m.path = path;
   m.file = H5Fcreate(part.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
   if (m.file < 0) throw std::runtime_error(path + ": cannot create trajectory file");
   const hsize_t n = sys.size(), dim = static_cast<hsize_t>(sys.dim);
@@ -314,7 +316,6 @@ H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& 
   }
   H5Gclose(par);
   check(H5Fflush(m.file, H5F_SCOPE_GLOBAL), "flush");
-  if (std::rename(part.c_str(), path.c_str()) != 0) throw std::runtime_error(path + ": cannot rename from " + part);
 }
 
 H5mdWriter::H5mdWriter(const std::string& path, long keep_frames, long keep_events) : impl_(std::make_unique<Impl>()) {
@@ -348,6 +349,7 @@ H5mdWriter::H5mdWriter(const std::string& path, long keep_frames, long keep_even
 H5mdWriter::~H5mdWriter() {
   try {
     close();
+    if (impl_ && !impl_->part.empty()) std::remove(impl_->part.c_str());  // no frame was written: nothing to keep
   } catch (...) {
   }
 }
@@ -371,6 +373,11 @@ void H5mdWriter::write_frame(long step, double time, const std::vector<double>& 
   m.rows_at_frame.append(k, step, time, &events_);
   ++frames_;
   flush();
+  if (!m.part.empty()) {  // the first frame is whole: the trajectory may appear under its name
+    if (std::rename(m.part.c_str(), m.path.c_str()) != 0)
+      throw std::runtime_error(m.path + ": cannot rename from " + m.part);
+    m.part.clear();
+  }
 }
 
 void H5mdWriter::append_bond_events(const std::vector<BondEvent>& events) {
