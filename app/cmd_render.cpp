@@ -146,23 +146,23 @@ void run(const RenderCli& o) {
   // Only the leading frames that read back whole (a cut file, a frame failing its checksum): the sequence is
   // then marked partial, on the terminal and in frames/PARTIAL.txt.
   long frames = rd.frames();
-  std::string damage = rd.damage();
+  std::string damage = analysis::trajectory_caveats(rd);  // a damaged file, a run short of its end
   for (long k = 0; k < frames; ++k) {
     if (!states.covers(k)) {
-      damage += std::string(damage.empty() ? "" : "; ") + states.damage();
+      analysis::add_note(damage, states.damage());
       frames = k;
       break;
     }
     try {
       (void)rd.frame(k);
     } catch (const std::exception& e) {
-      damage += std::string(damage.empty() ? "" : "; ") + "frame " + std::to_string(k) + " unreadable (" + e.what() + ")";
+      analysis::add_note(damage, "frame " + std::to_string(k) + " unreadable (" + e.what() + ")");
       frames = k;
     }
   }
   if (frames == 0) throw std::runtime_error((dir / "trajectory.h5").string() + ": no readable frame (" + damage + ")");
   if (!damage.empty())
-    std::fprintf(stderr, "pmfrag: warning: trajectory damaged (%s): rendering frames 0..%ld only (PARTIAL)\n",
+    std::fprintf(stderr, "pmfrag: warning: %s: rendering frames 0..%ld only (PARTIAL)\n",
                  damage.c_str(), frames - 1);
   const std::vector<double> times = rd.times();
   const TrajectoryFrame first = rd.frame(0);

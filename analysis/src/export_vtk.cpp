@@ -198,9 +198,8 @@ ExportResult export_vtk(const std::string& run_dir, const ExportOptions& opt) {
   const fs::path dir(run_dir);
   H5mdReader rd((dir / "trajectory.h5").string());
   ExportResult res;
-  if (!rd.damage().empty()) res.partial = true, res.note = "trajectory " + rd.damage();
-  if (const std::string why = rd.incomplete(); !why.empty())
-    res.partial = true, res.note += std::string(res.note.empty() ? "" : "; ") + "the run " + why;
+  res.note = trajectory_caveats(rd);
+  res.partial = !res.note.empty();
   Static st;
   st.n = rd.particles();
   st.dim = rd.dim();
@@ -220,7 +219,7 @@ ExportResult export_vtk(const std::string& run_dir, const ExportOptions& opt) {
   for (long k = 0; k < frames; ++k) {
     if (!states.covers(k)) {  // a record cut short: no bond state for the frames after it
       res.partial = true;
-      res.note += std::string(res.note.empty() ? "" : "; ") + states.damage() + "; exported frames before it";
+      add_note(res.note, states.damage() + "; exported frames before it");
       break;
     }
     TrajectoryFrame f;
@@ -228,8 +227,7 @@ ExportResult export_vtk(const std::string& run_dir, const ExportOptions& opt) {
       f = rd.frame(k);
     } catch (const std::exception& e) {
       res.partial = true;
-      res.note += std::string(res.note.empty() ? "" : "; ") + "frame " + std::to_string(k) + " unreadable (" + e.what() +
-                  "); exported frames before it";
+      add_note(res.note, "frame " + std::to_string(k) + " unreadable (" + e.what() + "); exported frames before it");
       break;
     }
     if (k == 0) first = f;

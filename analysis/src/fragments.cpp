@@ -194,6 +194,15 @@ void write_atomically(const std::filesystem::path& path, F&& body) {
 
 }  // namespace
 
+void add_note(std::string& note, const std::string& more) { note += (note.empty() ? "" : "; ") + more; }
+
+std::string trajectory_caveats(const H5mdReader& rd) {
+  std::string note;
+  if (!rd.damage().empty()) add_note(note, "trajectory " + rd.damage());
+  if (const std::string why = rd.incomplete(); !why.empty()) add_note(note, "the run " + why);
+  return note;
+}
+
 double break_length(const H5mdReader& rd, const BreakCriterion& c) {
   switch (c.kind) {
     case BreakCriterion::Kind::cutoff: return rd.parameter("cutoff");
@@ -222,9 +231,8 @@ std::string json_escaped(const std::string& text) {
 FragmentReport analyse_fragments(const std::string& trajectory, const std::optional<BreakCriterion>& distance) {
   H5mdReader rd(trajectory);
   FragmentReport rep;
-  if (!rd.damage().empty()) rep.partial = true, rep.note = "trajectory " + rd.damage();
-  if (const std::string why = rd.incomplete(); !why.empty())
-    rep.partial = true, rep.note += std::string(rep.note.empty() ? "" : "; ") + "the run " + why;
+  rep.note = trajectory_caveats(rd);
+  rep.partial = !rep.note.empty();
   BondStates states = BondStates::open(rd, distance);
   rep.bond_state = states.source();
   rep.threshold_cm = states.threshold_cm();
@@ -259,8 +267,7 @@ FragmentReport analyse_fragments(const std::string& trajectory, const std::optio
   for (long k = 0; k < rd.frames(); ++k) {
     if (!states.covers(k)) {  // a record cut short: the frames after it have no known bond state
       rep.partial = true;
-      rep.note += std::string(rep.note.empty() ? "" : "; ") + states.damage() + "; analysed frames 0.." +
-                  std::to_string(k - 1);
+      add_note(rep.note, states.damage() + "; analysed frames 0.." + std::to_string(k - 1));
       break;
     }
     TrajectoryFrame f;
@@ -268,8 +275,8 @@ FragmentReport analyse_fragments(const std::string& trajectory, const std::optio
       f = rd.frame(k);
     } catch (const std::exception& e) {
       rep.partial = true;
-      rep.note += std::string(rep.note.empty() ? "" : "; ") + "frame " + std::to_string(k) + " unreadable (" + e.what() +
-                  "); analysed frames 0.." + std::to_string(k - 1);
+      add_note(rep.note, "frame " + std::to_string(k) + " unreadable (" + e.what() + "); analysed frames 0.." +
+                             std::to_string(k - 1));
       break;
     }
     states.advance(k, f.position);

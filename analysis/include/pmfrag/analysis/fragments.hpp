@@ -132,6 +132,12 @@ class FragmentTracker {
   std::vector<double> mass_;
 };
 
+/// What makes everything read from this trajectory partial before any frame is read: damage to the file, and
+/// a run that stopped or was interrupted short of its end ("" if neither).
+std::string trajectory_caveats(const H5mdReader& trajectory);
+/// Appends `more` to a note, "; "-separated.
+void add_note(std::string& note, const std::string& more);
+
 /// The bond length [cm] beyond which a bond of this trajectory counts as broken.
 double break_length(const H5mdReader& trajectory, const BreakCriterion& criterion);
 
