@@ -29,7 +29,7 @@ reps=${REPS:-5}
 median() { sort -g | awk '{a[NR] = $1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
 # This VM's two virtual cores do not run at one speed: for minutes at a time one runs both codes ~1.45x
 # slower than the other (pmfrag 1.8e8 against 2.7e8, LAMMPS 1.65e7 against 2.4e7 on the bonded plate,
-# session 9). So one-core runs of both codes are pinned to the same core, and the runs alternate
+# 2026-12-01, docs/history.md). So one-core runs of both codes are pinned to the same core, and the runs alternate
 # (pmfrag, LAMMPS, pmfrag, ...) so that both see the machine in the same state.
 pin_1=(taskset -c "$(($(nproc) - 1))")
 lammps_once() {  # lammps_once INPUT RANKS -> particle-steps/s from "Loop time of T on P procs for S steps with A atoms"

@@ -326,7 +326,7 @@ TEST(Dynamics, VerletSkinFitsTheIntactLatticeAndWidensOnceItBreaks) {
   EXPECT_LT(bond_view<2>(pair).skin, gap);
   // Quiet: the pulled rows move far, but the plate stretches nearly affinely, and the list is kept while its
   // pairs' separations could not have closed the skin (affine_residual in pair.cpp; measured on the raw
-  // displacements instead, as before session 16, it was rebuilt 22 times).
+  // displacements instead, as before commit 31d5e4e, it was rebuilt 22 times).
   for (long k = 0; k < 20000; ++k) lf.step();
   const long quiet_builds = bond_view<2>(pair).list_builds;
   std::printf("first 20,000 steps: %ld list builds, skin %.3g r0\n", quiet_builds, bond_view<2>(pair).skin / sys.r0);

@@ -1,7 +1,7 @@
 // Each thread's share of the particles in proportion to its measured speed. On the project's 2-core VM the
 // two virtual cores are at times not equally fast: in slow minutes one core's half of the plate's force pass
 // took 16,300 cycles and the other's 10,200 for equal shares, and the other way round in the next run
-// (rdtsc, session 13). Every step waits for the slower thread (resident steps have one barrier a step). So
+// (rdtsc, 2026-12-02). Every step waits for the slower thread (resident steps have one barrier a step). So
 // each thread's busy time in resident steps (its move and forces, not its wait) is summed over a window of
 // steps, and the shares are then set in proportion to the particles each thread handled per unit of time,
 // if that shortens the slowest thread's predicted time by more than 3 % (the shares move in whole grains of

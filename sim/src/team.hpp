@@ -27,7 +27,7 @@ class Team {
   /// 8192, or PMFRAG_MIN_PARTICLES_PER_THREAD / set_min_particles_per_thread(). Below it a thread's share of a step is a
   /// few microseconds, and whether a second thread pays depends on the machine at the moment (on the
   /// project's 2-core VM the (7,14) plate ran 1.5x faster on two threads while both virtual cores were
-  /// free, 0.8x while the host kept one busy: docs/performance.md, session 9), so the static rule keeps
+  /// free, 0.8x while the host kept one busy: docs/history.md, 2026-12-01), so the static rule keeps
   /// small systems on one thread and the tuner measures.
   static std::size_t min_particles_per_thread();
   /// True if PMFRAG_MIN_PARTICLES_PER_THREAD or set_min_particles_per_thread() gave a value: the thread
@@ -118,7 +118,7 @@ class Team {
 
   // Every cache line is written by one thread only, and a worker learns of a job from one line: between
   // two virtual cores a line costs 150-600 ns to move on this VM (a worker started 300-1,200 cycles after
-  // the job was handed out, session 9), and the first version moved four or five per job.
+  // the job was handed out, measured 2026-12-01), and the first version moved four or five per job.
   struct alignas(64) Job {
     std::atomic<std::uint32_t> generation{0};  ///< bumped to hand out a job (or to stop)
     bool stop = false;
@@ -179,7 +179,7 @@ inline std::pair<long, long> share(long n, int tid, int threads, long grain = 1)
 inline constexpr long particle_grain = 256;
 /// Particle shares (Team::bounds) start on multiples of 64 particles (whole cache lines, whole vectors): in
 /// blocks of 256 the (7,14) plate's 2698 particles split 1536 / 1162, and the first thread's bond pass took
-/// 11,800 cycles a step against the second's 8,600 (measured, session 9).
+/// 11,800 cycles a step against the second's 8,600 (measured 2026-12-01).
 inline constexpr long share_grain = 64;
 
 /// body(first, last, tid) on every thread of the team for n particles, each with its share (Team::bounds).

@@ -1,7 +1,7 @@
 // How many threads a step runs on, chosen by measuring. Whether a second thread pays for a small body
 // depends on the machine at the moment, not only on the body: on the project's 2-core VM the (7,14) plate
 // (2698 particles, ~10 us a step) ran 1.5x faster on two threads while both virtual cores were free and
-// 0.8x as fast while the host kept one of them busy (docs/performance.md, session 9). Every particle's force
+// 0.8x as fast while the host kept one of them busy (docs/history.md, 2026-12-01). Every particle's force
 // is summed in a fixed order, so the trajectory is bitwise the same whatever count is chosen: the choice may
 // follow the clock without costing reproducibility.
 //
@@ -11,7 +11,7 @@
 // between steps does not sway it), and holds the fastest until
 // the next probe. Not the median: on this VM a two-thread step of the plate had a median of 17,700 cycles
 // and a mean of 22,400 (the worker now and then starts or finishes thousands of cycles late, in one step
-// of ten or more; rdtsc, session 10), so the median chose two threads where one ran as fast. Only probe
+// of ten or more; rdtsc, 2026-12-02), so the median chose two threads where one ran as fast. Only probe
 // windows read the clock.
 #pragma once
 
