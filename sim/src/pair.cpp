@@ -120,7 +120,8 @@ class PairEffect final : public Effect<D> {
   // step that follows decides whether to rebuild (after_move).
   bool resident_begin(State<D>&, const std::vector<long>& bounds) override {
     const std::size_t threads = bounds.size() - 1;
-    moved_of_.assign(threads * 8, moved_bound_);  // a cache line per thread: [0] moved_bound_, [1] drift_
+    moved_of_.assign(threads * 8, moved_bound_);  // a cache line per thread: [0] moved_bound_, [1] drift_,
+    for (std::size_t t = 0; t < threads; ++t) moved_of_[t * 8 + 2] = since_break_;  // [2] since_break_
     if (spec_.model == PairModel::cutoff) {
       if (list_.size() == 0 || far_margin_ < 0.0) return false;  // (the plain step zeroes f / makes a full pass)
       list_stencil_.prepare(bounds);
@@ -152,12 +153,12 @@ class PairEffect final : public Effect<D> {
   }
   bool resident_due(const State<D>&, double max_step, int tid) const override {
     const double* mine = &moved_of_[static_cast<std::size_t>(tid) * 8];
-    return (uses_list_ && !list_holds(mine[0] + max_step)) ||
+    return (uses_list_ && !list_holds(mine[0] + max_step, mine[2] + max_step)) ||
            (spec_.model == PairModel::cutoff && crossing_pass_due(mine[1] + max_step));
   }
   void resident_moved(double max_step, int tid) override {
     double* mine = &moved_of_[static_cast<std::size_t>(tid) * 8];
-    if (uses_list_) mine[0] += max_step;
+    if (uses_list_) mine[0] += max_step, mine[2] += max_step;
     if (spec_.model == PairModel::cutoff) mine[1] += max_step;
   }
   long resident_forces(State<D>& s, const double* x, int tid) override {
@@ -189,7 +190,7 @@ class PairEffect final : public Effect<D> {
     });
   }
   void resident_end(State<D>&) override {
-    if (uses_list_) moved_bound_ = moved_of_.front();
+    if (uses_list_) moved_bound_ = moved_of_[0], since_break_ = moved_of_[2];
     if (spec_.model == PairModel::cutoff) drift_ = moved_of_[1];
   }
   void resident_settle(State<D>& s) override {
@@ -223,12 +224,13 @@ class PairEffect final : public Effect<D> {
     // Verlet criterion with a bound instead of a pass over the particles: no particle has moved more than
     // the sum of the largest single-step moves since the build. Rebuild before two could have closed the skin.
     moved_bound_ += max_step;
-    if (list_holds(moved_bound_)) return;
+    since_break_ += max_step;
+    if (list_holds(moved_bound_, since_break_)) return;
     // The bound is loose once particles vibrate: each step's largest move is added though they move back.
     // The displacements themselves decide (one pass over the particles, cheaper than a rebuild: the broken
     // cutoff plate rebuilt every 24 steps on the bound, at ~2 ms each). Well before the skin is used up
     // the list is rebuilt anyway, so this pass does not run every step.
-    if (std::isfinite(moved_bound_)) {  // (infinite: a bond broke, rebuild now)
+    if (2.0 * since_break_ < break_room_) {  // (else a pair whose bond broke may be near: rebuild now)
       const double moved = std::sqrt(max_displacement2(s));
       if (2.0 * moved < 0.75 * skin_) {
         moved_bound_ = moved;  // still a bound on every particle's displacement since the build
@@ -342,16 +344,23 @@ class PairEffect final : public Effect<D> {
 
   // The Verlet criterion, one test for plain and resident steps: while no particle's residual (its
   // displacement since the build less the common map of affine_residual; at the build, none) exceeds
-  // `bound` [cm], no pair outside the list can have come within reach.
-  bool list_holds(double bound) const { return 2.0 * bound < room_; }
+  // `bound` [cm], no pair outside the list can have come within reach; nor a pair whose bond broke since
+  // the build, while no particle has moved `since_break` [cm] since the first such break (break_room_).
+  bool list_holds(double bound, double since_break) const {
+    return 2.0 * bound < room_ && 2.0 * since_break < break_room_;
+  }
 
   // Bonds found too long in the last force evaluation are gone for good (bonded model).
   void settle_breaks(const State<D>& s, long broke) {
     if (spec_.model != PairModel::bonded || broke == 0) return;
-    retire_broken(s);
-    // A pair whose bond just broke must repel as a contact from the next step on: rebuild the list then
-    // (it excluded the pair while bonded).
-    if (uses_list_) moved_bound_ = std::numeric_limits<double>::infinity();
+    const double closest = retire_broken(s);
+    // A pair whose bond just broke must repel as a contact once it comes back within reach, and the list
+    // left it out while bonded. It is D or more apart now and closes by at most twice the moves since, so the
+    // list holds until those add up to half its distance to reach (D - r_eq ~ 0.7 r0: far more than the skin
+    // allows). Rebuilding at every break instead was most of a 3-D impact's run (a rebuild nearly every step).
+    if (!uses_list_) return;
+    if (!std::isfinite(break_room_)) since_break_ = 0.0;
+    break_room_ = std::min(break_room_, closest - max_reach_);
   }
 
   void record(const State<D>& s, std::size_t b, bool re_formed) {
@@ -466,9 +475,11 @@ class PairEffect final : public Effect<D> {
       team.run([&](int tid) { body(tid, team.size()); });
   }
 
-  void retire_broken(const State<D>& s) {
+  /// Retires the bonds longer than D at s.x; returns the shortest of them [cm].
+  double retire_broken(const State<D>& s) {
     const double cut2 = cutoff_ * cutoff_;
     const double* x = s.x.front().data();
+    double shortest2 = std::numeric_limits<double>::infinity();
     for (std::size_t b = 0; b < bi_.size(); ++b) {
       if (!alive_[b]) continue;
       const double r2 = bond_r2(x, b);
@@ -477,8 +488,10 @@ class PairEffect final : public Effect<D> {
         stencil_.set_alive(b, false);
         phi_break_[b] = law_potential(laws_[static_cast<std::size_t>(blaw_[b])], std::sqrt(r2), r_min_);
         record(s, b, false);
+        shortest2 = std::min(shortest2, r2);
       }
     }
+    return std::sqrt(shortest2);
   }
 
   // The skin trades pairs evaluated every step against rebuilds (~1.5 ms for the plate, ~60 steps' work).
@@ -543,6 +556,8 @@ class PairEffect final : public Effect<D> {
     }
     moved_bound_ = 0.0;
     room_ = skin_;
+    since_break_ = 0.0;
+    break_room_ = std::numeric_limits<double>::infinity();
     built_step_ = s.step;
     x_build_.assign(s.x.front().data(), s.x.front().data() + s.size() * D);
   }
@@ -651,6 +666,8 @@ class PairEffect final : public Effect<D> {
   detail::BondStencil<D> list_stencil_;  ///< cutoff model: the Verlet list
   PairTable<D> list_;
   double moved_bound_ = 0.0;  ///< cm: bound on any particle's residual (list_holds) since the last list build
+  double since_break_ = 0.0;  ///< cm: bound on any particle's move since the first bond broke after the build
+  double break_room_ = std::numeric_limits<double>::infinity();  ///< cm: shortest such pair at its break, less reach
   double room_ = 0.0;  ///< cm: twice the largest residual the list allows (the skin at the build; affine_residual)
   std::vector<double> x_build_;  ///< cm: positions (N x D) at the last list build
   CellList<D> cells_;

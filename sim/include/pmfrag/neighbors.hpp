@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -38,6 +39,10 @@ class CellList {
     sorted_.resize(n);
     for (std::size_t a = 0; a < n; ++a) sorted_[a] = x[entries_[a].index];
     const double cut2 = cutoff * cutoff;
+    // One cursor per row of neighbour cells (dz, dy): cells are visited in key order, so the first key a row
+    // needs only grows, and each cursor moves forward through the sorted entries (a binary search per
+    // neighbour cell was most of a contact-list rebuild in 3-D).
+    std::array<std::size_t, 9> cursor{};
     std::size_t begin = 0;
     while (begin < n) {
       std::size_t end = begin;
@@ -45,18 +50,28 @@ class CellList {
       while (end < n && entries_[end].key == key) ++end;
       const auto c = unpack(key);
       // Neighbour cells with key >= this one cover each pair of cells once (same cell: i < j).
+      int row = 0;
       for (int dz = (D == 3 ? -1 : 0); dz <= (D == 3 ? 1 : 0); ++dz)
-        for (int dy = -1; dy <= 1; ++dy)
+        for (int dy = -1; dy <= 1; ++dy, ++row) {
+          const std::int64_t ny = c[1] + dy, nz = c[2] + dz;
+          if (ny < 0 || nz < 0 || ny > max_cell || nz > max_cell) continue;
+          if (pack({c[0] + 1 > max_cell ? max_cell : c[0] + 1, ny, nz}) < key) continue;  // the whole row lies below
+          // The row's first key for this cell; the next cell (one to the right) needs the cell after it.
+          std::size_t& first = cursor[static_cast<std::size_t>(row)];
+          const std::uint64_t row_key = pack({c[0] > 0 ? c[0] - 1 : 0, ny, nz});
+          while (first < n && entries_[first].key < row_key) ++first;
+          std::size_t at = first;
           for (int dx = -1; dx <= 1; ++dx) {
-            std::array<std::int64_t, 3> nc{c[0] + dx, c[1] + dy, c[2] + dz};
-            if (nc[0] < 0 || nc[1] < 0 || nc[2] < 0 || nc[0] > max_cell || nc[1] > max_cell || nc[2] > max_cell) continue;
-            const std::uint64_t nkey = pack(nc);
+            const std::int64_t nx = c[0] + dx;
+            if (nx < 0 || nx > max_cell) continue;
+            const std::uint64_t nkey = pack({nx, ny, nz});
             if (nkey < key) continue;
-            auto range = std::equal_range(entries_.begin(), entries_.end(), Entry{nkey, 0},
-                                          [](const Entry& a, const Entry& b) { return a.key < b.key; });
-            checks_ += (end - begin) * static_cast<std::size_t>(range.second - range.first);
-            const std::size_t nb = static_cast<std::size_t>(range.first - entries_.begin());
-            const std::size_t ne = static_cast<std::size_t>(range.second - entries_.begin());
+            while (at < n && entries_[at].key < nkey) ++at;
+            const std::size_t nb = at;
+            std::size_t ne = nb;
+            while (ne < n && entries_[ne].key == nkey) ++ne;
+            at = ne;
+            checks_ += (end - begin) * (ne - nb);
             for (std::size_t a = begin; a < end; ++a) {
               const std::uint32_t i = entries_[a].index;
               const V xi = sorted_[a];
@@ -69,6 +84,7 @@ class CellList {
               }
             }
           }
+        }
       begin = end;
     }
   }
