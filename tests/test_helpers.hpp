@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 namespace pmfrag::test {
@@ -23,6 +25,14 @@ inline double test_scale() {
 inline long scaled(long n) { return std::max(1L, static_cast<long>(static_cast<double>(n) * test_scale())); }
 
 inline std::string case_path(const std::string& name) { return std::string(PMFRAG_SOURCE_DIR) + "/cases/" + name; }
+
+/// A whole text file (empty if it cannot be read: the caller's assertions then fail on it).
+inline std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
 
 inline std::filesystem::path temp_dir(const std::string& name) {
   auto p = std::filesystem::temp_directory_path() / ("pmfrag_test_" + name + "_" + std::to_string(::getpid()));

@@ -203,3 +203,64 @@ end = 1e-6
   // moved clear of each other, the same scene builds
   EXPECT_NO_THROW((void)build_system(parse_scene(two, "clear.toml", {"body.0.shape.center=[0.0, 1.6]"})));
 }
+
+// docs/scenes.md lists every key the parser reads: each example on the page parses, and the keys the parser
+// asks for over those examples and every case in cases/ are exactly the keys the page's tables list.
+TEST(SceneKeys, DocumentMatchesTheParser) {
+  const std::string page = test::read_text(std::string(PMFRAG_SOURCE_DIR) + "/docs/scenes.md");
+  std::set<std::string> documented;
+  std::istringstream lines(page);
+  std::vector<std::string> examples;
+  std::string line, example;
+  bool in_example = false;
+  for (int number = 1; std::getline(lines, line); ++number) {
+    if (line == "```toml") {
+      in_example = true;
+      example.clear();
+    } else if (in_example && line == "```") {
+      in_example = false;
+      examples.push_back(example);
+    } else if (in_example) {
+      example += line + "\n";
+    } else if (line.rfind("| `", 0) == 0) {  // a table row: its first cell is the key
+      const auto end = line.find('`', 3);
+      ASSERT_NE(end, std::string::npos) << "docs/scenes.md:" << number;
+      documented.insert(line.substr(3, end - 3));
+    }
+  }
+  ASSERT_GE(examples.size(), 4u);
+  std::set<std::string> asked;
+  for (std::size_t k = 0; k < examples.size(); ++k) {
+    try {
+      parse_scene(examples[k], "docs/scenes.md example " + std::to_string(k + 1), {}, &asked);
+    } catch (const SceneError& e) {
+      ADD_FAILURE() << e.what();
+    }
+  }
+  for (const auto& f : std::filesystem::directory_iterator(std::string(PMFRAG_SOURCE_DIR) + "/cases")) {
+    if (f.path().extension() != ".toml" || f.path().stem().string().rfind("sweep_", 0) == 0) continue;
+    parse_scene(test::read_text(f.path().string()), f.path().string(), {}, &asked);
+  }
+  for (const auto& k : asked) EXPECT_TRUE(documented.count(k)) << "the parser reads '" << k << "': not in docs/scenes.md";
+  for (const auto& k : documented) EXPECT_TRUE(asked.count(k)) << "docs/scenes.md lists '" << k << "': no example or case reaches it";
+}
+
+// Keys named as messages print them work in --set too.
+TEST(SceneKeys, SetTakesTheKeysMessagesPrint) {
+  const std::string text = R"(
+[[body]]
+lattice = "triangular"
+shape = { kind = "disc", center = [0.0, 0.0], radius = 1.0 }
+holes = [ { kind = "disc", center = [0.0, 0.0], radius = 0.2 } ]
+[[phase]]
+p = 7
+q = 14
+[time]
+dt = 1e-7
+end = 1e-6
+)";
+  const std::string what = error_of(text, {"body[0].holes[0].radius=-1.0"});
+  EXPECT_NE(what.find("key 'body[0].holes[0].radius': must be positive"), std::string::npos) << what;
+  EXPECT_DOUBLE_EQ(parse_scene(text, "t.toml", {"body[0].holes[0].radius=0.3"}).bodies[0].holes[0].radius, 0.3);
+  EXPECT_DOUBLE_EQ(parse_scene(text, "t.toml", {"body.0.r0=0.1"}).bodies[0].r0, 0.1);
+}

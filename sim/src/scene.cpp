@@ -25,10 +25,20 @@ std::string Selection::describe() const {
 
 namespace {
 
-// One table being read: remembers which keys were used so the rest can be reported as unknown.
+// One table being read: remembers which keys were used so the rest can be reported as unknown. Every key
+// asked for is also reported to `asked` (if given) under its documented name (docs/scenes.md): arrays of
+// tables as "body[]", every region as "region".
 class Tab {
  public:
-  Tab(const toml::table& t, std::string path, const std::string& file) : t_(t), path_(std::move(path)), file_(file) {}
+  Tab(const toml::table& t, std::string path, const std::string& file, std::set<std::string>* asked = nullptr,
+      std::string doc = "")
+      : t_(t), path_(std::move(path)), file_(file), asked_(asked), doc_(std::move(doc)) {}
+
+  /// The same table, documented under another name (a region wherever it appears).
+  Tab& documented_as(std::string doc) {
+    doc_ = std::move(doc);
+    return *this;
+  }
 
   std::string key_path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
 
@@ -46,6 +56,7 @@ class Tab {
 
   const toml::node* get(const std::string& key) {
     used_.insert(key);
+    if (asked_) asked_->insert(doc_key(key));
     return t_.get(key);
   }
   bool has(const std::string& key) const { return t_.contains(key); }
@@ -108,11 +119,12 @@ class Tab {
   Tab sub(const std::string& key) {
     const toml::node& n = require(key);
     if (!n.is_table()) fail_at(&n, key, "expected a table");
-    return Tab(*n.as_table(), key_path(key), file_);
+    return Tab(*n.as_table(), key_path(key), file_, asked_, doc_key(key));
   }
-  Tab sub_of(const toml::node& n, const std::string& path) const {
+  /// A table at `path` (for messages) that is documented as `doc`.
+  Tab sub_of(const toml::node& n, const std::string& path, const std::string& doc) const {
     if (!n.is_table()) fail_at(&n, path.substr(path_.empty() ? 0 : path_.size() + 1), "expected a table");
-    return Tab(*n.as_table(), path, file_);
+    return Tab(*n.as_table(), path, file_, asked_, doc);
   }
   // An array of tables ([[key]]); absent = empty.
   std::vector<Tab> tables(const std::string& key) {
@@ -123,7 +135,8 @@ class Tab {
     if (!a) fail_at(n, key, "expected an array of tables ([[" + key + "]])");
     for (std::size_t i = 0; i < a->size(); ++i) {
       if (!(*a)[i].is_table()) fail_at(&(*a)[i], key, "expected a table");
-      out.emplace_back(*(*a)[i].as_table(), key_path(key) + "[" + std::to_string(i) + "]", file_);
+      out.emplace_back(*(*a)[i].as_table(), key_path(key) + "[" + std::to_string(i) + "]", file_, asked_,
+                       doc_key(key) + "[]");
     }
     return out;
   }
@@ -146,15 +159,19 @@ class Tab {
     }
   }
   const toml::table& table() const { return t_; }
+  std::string doc_key(const std::string& key) const { return doc_.empty() ? key : doc_ + "." + key; }
 
  private:
   const toml::table& t_;
   std::string path_;
   const std::string& file_;
+  std::set<std::string>* asked_;
+  std::string doc_;
   std::set<std::string> used_;
 };
 
 Region read_region(Tab t, int dim) {
+  t.documented_as("region");
   Region r;
   const std::string kind = t.string("kind");
   if (kind == "rect" || kind == "box") {
@@ -186,7 +203,7 @@ Selection read_selection(Tab& parent, const std::string& key, int dim) {
     if (*n.value<std::string>() != "all") parent.fail_at(&n, key, "expected \"all\" or a table");
     return s;
   }
-  Tab t = parent.sub_of(n, parent.key_path(key));
+  Tab t = parent.sub_of(n, parent.key_path(key), parent.doc_key(key));
   int given = 0;
   if (t.has("row")) {
     ++given;
@@ -255,7 +272,8 @@ BodySpec read_body(Tab t, int dim, std::size_t index) {
     const toml::array* a = n->as_array();
     if (!a) t.fail_at(n, "holes", "expected an array of regions");
     for (std::size_t i = 0; i < a->size(); ++i)
-      b.holes.push_back(read_region(t.sub_of((*a)[i], t.key_path("holes") + "[" + std::to_string(i) + "]"), dim));
+      b.holes.push_back(
+          read_region(t.sub_of((*a)[i], t.key_path("holes") + "[" + std::to_string(i) + "]", "region"), dim));
   }
   if (const toml::node* n = t.get("void_sites")) {
     if (const toml::array* a = n->as_array()) {
@@ -313,7 +331,15 @@ PhaseSpec read_phase(Tab t, int dim, std::size_t index, double r0) {
 void apply_override(toml::table& doc, const std::string& item) {
   const auto eq = item.find('=');
   if (eq == std::string::npos || eq == 0) throw SceneError("--set '" + item + "': expected key=value");
-  const std::string key = item.substr(0, eq), text = item.substr(eq + 1);
+  // Keys as messages print them (body[0].holes[1].kind) or dotted (body.0.holes.1.kind).
+  std::string key;
+  for (const char c : item.substr(0, eq)) {
+    if (c == '[')
+      key += '.';
+    else if (c != ']')
+      key += c;
+  }
+  const std::string text = item.substr(eq + 1);
   toml::table parsed;
   try {
     parsed = toml::parse("v = " + text);
@@ -348,7 +374,8 @@ void apply_override(toml::table& doc, const std::string& item) {
 
 }  // namespace
 
-Scene parse_scene(const std::string& text, const std::string& file, const std::vector<std::string>& overrides) {
+Scene parse_scene(const std::string& text, const std::string& file, const std::vector<std::string>& overrides,
+                  std::set<std::string>* keys_asked) {
   toml::table doc;
   try {
     doc = toml::parse(text, file);
@@ -363,7 +390,7 @@ Scene parse_scene(const std::string& text, const std::string& file, const std::v
   sc.file = file;
   sc.source = text;
   sc.overrides = overrides;
-  Tab top(doc, "", file);
+  Tab top(doc, "", file, keys_asked);
   sc.title = top.string("title", "");
 
   // Dimension from the first body's lattice.

@@ -7,6 +7,7 @@
 #include "pmfrag/material.hpp"
 
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -122,7 +123,10 @@ struct Scene {
 /// Reads and validates a scene. `overrides` are "dotted.key=value" strings (value in TOML syntax; bare words
 /// are taken as strings); they replace or add keys before validation.
 Scene read_scene(const std::string& path, const std::vector<std::string>& overrides = {});
-/// Same, from text (file is only used in messages).
-Scene parse_scene(const std::string& text, const std::string& file, const std::vector<std::string>& overrides = {});
+/// Same, from text (file is only used in messages). If `keys_asked` is given, every key the parser looked for
+/// is added to it under its name in docs/scenes.md ("body[].shape" is a "region": "region.kind"; tables in
+/// arrays as "kinematic[].select.row").
+Scene parse_scene(const std::string& text, const std::string& file, const std::vector<std::string>& overrides = {},
+                  std::set<std::string>* keys_asked = nullptr);
 
 }  // namespace pmfrag
