@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -186,9 +187,11 @@ void run(const RenderCli& o) {
     }
   }
 
+  const std::vector<std::uint8_t> target = analysis::target_particles(rd);
+  const bool any_target = std::find(target.begin(), target.end(), 1) != target.end();
   render::FieldSpec spec;
   spec.categorical = o.field == "fragment_id" || o.field == "phase";
-  spec.title = o.field == "fragment_id"    ? "fragment"
+  spec.title = o.field == "fragment_id"    ? (any_target ? "fragment\n(pale: held)" : "fragment")
                : o.field == "phase"        ? "phase"
                : o.field == "damage"       ? "damage"
                : o.field == "displacement" ? "displacement\n[cm]"
@@ -259,7 +262,11 @@ void run(const RenderCli& o) {
     const bool want_frame = !o.no_frames && (k % o.every == 0 || k == frames - 1);
     const bool in_panel = std::find(panel_frames.begin(), panel_frames.end(), k) != panel_frames.end();
     if (!want_frame && !in_panel) continue;
-    auto pic = picture(f, field_values(o.field, f, first, lab, species, dim), dim, cut_axis, cut_at, first, overlay);
+    auto values = field_values(o.field, f, first, lab, species, dim);
+    if (o.field == "fragment_id")  // targets held in place are not fragments: drawn pale grey (the colour of NaN)
+      for (std::size_t i = 0; i < values.size(); ++i)
+        if (target[i]) values[i] = std::numeric_limits<double>::quiet_NaN();
+    auto pic = picture(f, values, dim, cut_axis, cut_at, first, overlay);
     if (want_frame) {
       char name[32];
       std::snprintf(name, sizeof name, "frame_%05ld.png", k);

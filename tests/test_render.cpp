@@ -259,3 +259,33 @@ TEST(Render, ThreeDimensionalViewShowsTheBoxInPerspective) {
   EXPECT_LT(ink_border, 60) << "the body touches the panel's edges";
   std::filesystem::remove_all(dir);
 }
+
+TEST(Render, ParticlesOfNoCategoryArePaleGrey) {
+  // Targets held in place carry NaN in a categorical field (pmfrag render): drawn pale grey, which no
+  // fragment colour is, so a wall never passes for a fragment.
+  const auto dir = test::temp_dir("render_nan");
+  render::HeadlessWindow window(200, 200);
+  render::View view;
+  view.xmin = view.ymin = 0.0;
+  view.xmax = view.ymax = 1.0;
+  view.radius = 0.2;
+  render::FieldSpec field;
+  field.categorical = true;
+  field.title = "fragment";
+  render::FramePicture pic;
+  pic.xyz = {0.25, 0.5, 0.0, 0.75, 0.5, 0.0};
+  pic.value = {std::numeric_limits<double>::quiet_NaN(), 0.0};
+  const std::string png = (dir / "nan.png").string();
+  render::render_png(window, view, field, {pic}, "", 200, 200, png);
+  const Image im = read_png(png);
+  int pale = 0, orange = 0;
+  for (int x = 0; x < 200; ++x)  // the panel, not the colour bar beside it
+    for (int y = 0; y < im.h; ++y) {
+      const auto c = im.at(x, y);
+      pale += c[0] == c[1] && c[1] == c[2] && c[0] > 200 && c[0] < 240;
+      orange += c[0] > 200 && c[1] > 120 && c[1] < 180 && c[2] < 60;
+    }
+  EXPECT_GT(pale, 200) << "the NaN particle is not pale grey";
+  EXPECT_GT(orange, 200) << "fragment 0 lost its colour";
+  std::filesystem::remove_all(dir);
+}

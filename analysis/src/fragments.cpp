@@ -228,6 +228,15 @@ std::string json_escaped(const std::string& text) {
 }
 }  // namespace
 
+std::vector<std::uint8_t> target_particles(const H5mdReader& rd) {
+  const auto held = rd.held(), body = rd.body();
+  std::map<int, bool> free_body;
+  for (std::size_t i = 0; i < held.size(); ++i) free_body[body[i]] = free_body[body[i]] || !held[i];
+  std::vector<std::uint8_t> target(held.size(), 0);
+  for (std::size_t i = 0; i < held.size(); ++i) target[i] = !free_body[body[i]];
+  return target;
+}
+
 FragmentReport analyse_fragments(const std::string& trajectory, const std::optional<BreakCriterion>& distance) {
   H5mdReader rd(trajectory);
   FragmentReport rep;
@@ -240,15 +249,8 @@ FragmentReport analyse_fragments(const std::string& trajectory, const std::optio
   if (laws.size() == 1) rep.p = laws.front().p, rep.q = laws.front().q;  // several phases: no single (p,q)
   rep.criterion = states.describe();
   const auto mass = rd.mass();
-  // A body every particle of which a kinematic selection moves (a target held in place) is a boundary, not
-  // material under study: its pieces are left out of the counts, fractions and distribution.
-  std::vector<std::uint8_t> target(mass.size(), 0);
-  {
-    const auto held = rd.held(), body = rd.body();
-    std::map<int, bool> free_body;
-    for (std::size_t i = 0; i < mass.size(); ++i) free_body[body[i]] = free_body[body[i]] || !held[i];
-    for (std::size_t i = 0; i < mass.size(); ++i) target[i] = !free_body[body[i]];
-  }
+  // Targets' pieces are left out of the counts, fractions and distribution.
+  const std::vector<std::uint8_t> target = target_particles(rd);
   for (std::size_t i = 0; i < mass.size(); ++i)
     if (!target[i]) rep.total_mass += mass[i], ++rep.particles;
     else ++rep.target_particles;

@@ -55,6 +55,7 @@ vtkNew<vtkLookupTable> make_lut(const FieldSpec& f) {
     lut->SetNumberOfTableValues(8);
     for (int k = 0; k < 8; ++k) lut->SetTableValue(k, palette[k][0], palette[k][1], palette[k][2], 1.0);
     lut->SetTableRange(0, 7);
+    lut->SetNanColor(0.88, 0.88, 0.88, 1.0);  // particles that belong to no category (targets held in place)
   } else {
     const auto& anchors = detail::ramp_anchors;
     lut->SetNumberOfTableValues(256);

@@ -135,6 +135,11 @@ class FragmentTracker {
 /// What makes everything read from this trajectory partial before any frame is read: damage to the file, and
 /// a run that stopped or was interrupted short of its end ("" if neither).
 std::string trajectory_caveats(const H5mdReader& trajectory);
+
+/// Per particle, 1 if it belongs to a target: a body every particle of which a kinematic selection moves (a
+/// wall or plate held in place). Targets are boundaries, not material under study: the statistics leave them
+/// out and pictures draw them grey.
+std::vector<std::uint8_t> target_particles(const H5mdReader& trajectory);
 /// Appends `more` to a note, "; "-separated.
 void add_note(std::string& note, const std::string& more);
 
