@@ -1,6 +1,7 @@
 #include "cmd_run.hpp"
 
 #include "parse.hpp"
+#include "pmfrag/build_info.hpp"
 #include "pmfrag/run.hpp"
 
 #include <omp.h>
@@ -73,9 +74,9 @@ void run(const RunCli& o) {
     std::printf("%s\n", r.message.c_str());
     return;
   }
-  std::printf("%s: %ld steps, %ld frames, %zu particles in %.3g s (%.3g particle-steps/s, %d threads)\n",
+  std::printf("%s: %ld steps, %ld frames, %zu particles in %.3g s (%.3g particle-steps/s, %d threads, %s kernels, %s)\n",
               r.completed ? "finished" : "STOPPED", r.steps, r.frames, r.particles, r.wall_s, r.particle_steps_per_s(),
-              r.threads());
+              r.threads(), kernel_path(), processor_name().c_str());
   // What happened to the bonds, in the words of the model that ran.
   if (r.pair_model == "cutoff") {
     if (r.bonds_broken > 0)

@@ -27,7 +27,7 @@ struct StencilTerm {
 };
 }  // namespace pmfrag::detail
 
-#if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__)
+#if defined(__AVX512F__) && defined(__AVX512BW__) && defined(__AVX512VL__) && !defined(PMFRAG_PORTABLE_KERNELS)
 #define PMFRAG_HAVE_AVX512_SWEEP 1
 // GCC 12 reports its own intrinsics' placeholder operands (_mm512_undefined_*) as maybe uninitialized.
 #if defined(__GNUC__) && !defined(__clang__)

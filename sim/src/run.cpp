@@ -1,5 +1,6 @@
 #include "pmfrag/run.hpp"
 
+#include "pmfrag/build_info.hpp"
 #include "pmfrag/h5md.hpp"
 #include "pmfrag/leapfrog.hpp"
 #include "pmfrag/step_levels.hpp"
@@ -219,15 +220,21 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
   const fs::path tmp = dir / "run.json.tmp";
   {
     std::ofstream js(tmp);
+    const auto text = [](const std::string& s) {  // a JSON string's characters
+      std::string out;
+      for (char c : s) out += (c == '"' || c == '\\' ? std::string("\\") + c : std::string(1, c));
+      return out;
+    };
     js << "{\n  \"completed\": " << (res.completed ? "true" : "false")
-       << ",\n  \"interrupted\": " << (res.interrupted ? "true" : "false") << ",\n  \"message\": \"";
-    for (char c : res.message) js << (c == '"' || c == '\\' ? std::string("\\") + c : std::string(1, c));
+       << ",\n  \"interrupted\": " << (res.interrupted ? "true" : "false") << ",\n  \"message\": \"" << text(res.message);
     js << "\",\n  \"particles\": " << res.particles << ",\n  \"steps\": " << res.steps
        << ",\n  \"frames\": " << res.frames << ",\n  \"dt_s\": " << fmt("%.10g", dt)
        << ",\n  \"dt_adaptive\": " << (adaptive ? "true" : "false") << ",\n  \"dt_min_s\": " << fmt("%.10g", res.dt_min)
        << ",\n  \"dt_limit_s\": " << fmt("%.10g", limit) << ",\n  \"wall_s\": " << fmt("%.6g", res.wall_s)
        << ",\n  \"particle_steps_per_s\": " << fmt("%.6g", res.particle_steps_per_s())
-       << ",\n  \"threads\": " << res.threads() << ",\n  \"steps_by_threads\": {" << [&] {
+       << ",\n  \"threads\": " << res.threads() << ",\n  \"kernels\": \"" << kernel_path() << "\""
+       << ",\n  \"processor\": \"" << text(processor_name()) << "\""
+       << ",\n  \"steps_by_threads\": {" << [&] {
             std::string by;
             for (std::size_t t = 1; t < res.thread_steps.size(); ++t)
               if (res.thread_steps[t] > 0) by += (by.empty() ? "\"" : ", \"") + std::to_string(t) + "\": " + std::to_string(res.thread_steps[t]);
