@@ -3,6 +3,7 @@
 #include "movie.hpp"
 #include "parse.hpp"
 #include "pmfrag/analysis/fragments.hpp"
+#include "pmfrag/analysis/particle_fields.hpp"
 #include "pmfrag/h5md.hpp"
 #include "pmfrag/render/frames.hpp"
 
@@ -30,31 +31,6 @@ struct RenderCli {
   bool bonds = false;
   bool no_frames = false, movie = false;
 };
-
-// One value per particle for the chosen field.
-std::vector<double> field_values(const std::string& field, const TrajectoryFrame& f, const TrajectoryFrame& first,
-                                 const analysis::FrameLabels& lab, const std::vector<int>& species, int dim) {
-  const std::size_t n = species.size(), d = static_cast<std::size_t>(dim);
-  std::vector<double> v(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    double s = 0;
-    if (field == "fragment_id") {
-      s = lab.fragment_id[i];
-    } else if (field == "phase") {
-      s = species[i];
-    } else if (field == "damage") {
-      s = lab.damage[i];
-    } else if (field == "displacement") {
-      for (std::size_t c = 0; c < d; ++c) s += std::pow(f.position[i * d + c] - first.position[i * d + c], 2);
-      s = std::sqrt(s);
-    } else if (field == "speed") {
-      for (std::size_t c = 0; c < d; ++c) s += f.velocity[i * d + c] * f.velocity[i * d + c];
-      s = std::sqrt(s);
-    }
-    v[i] = s;
-  }
-  return v;
-}
 
 // What to draw over the particles (--bonds, --vectors).
 struct Overlay {
@@ -140,10 +116,11 @@ void run(const RenderCli& o) {
     cut_at = parse_numbers("--cut", o.cut.substr(eq + 1), 1)[0];
   }
   const auto species = rd.species();
+  const auto mass = rd.mass();
   const double r0 = rd.parameter("r0");
   // Broken bonds as the engine recorded them (older trajectories: longer than D at a frame).
   analysis::BondStates states = analysis::BondStates::open(rd, std::nullopt);
-  const analysis::FragmentTracker tracker(rd.particles(), rd.bonds(), rd.mass());
+  const analysis::FragmentTracker tracker(rd.particles(), rd.bonds(), mass);
   // Only the leading frames that read back whole (a cut file, a frame failing its checksum): the sequence is
   // then marked partial, on the terminal and in frames/PARTIAL.txt.
   long frames = rd.frames();
@@ -204,7 +181,8 @@ void run(const RenderCli& o) {
       for (long k = 0; k < frames; ++k) {
         const auto f = rd.frame(k);
         probe.advance(k, f.position);
-        const auto v = field_values(o.field, f, first, tracker.label(probe.broken()), species, dim);
+        const auto labels = tracker.label(probe.broken());
+        const auto v = analysis::particle_field(o.field, {f, first, labels, species, mass, dim});
         spec.max = std::max(spec.max, *std::max_element(v.begin(), v.end()));
       }
     }
@@ -262,7 +240,7 @@ void run(const RenderCli& o) {
     const bool want_frame = !o.no_frames && (k % o.every == 0 || k == frames - 1);
     const bool in_panel = std::find(panel_frames.begin(), panel_frames.end(), k) != panel_frames.end();
     if (!want_frame && !in_panel) continue;
-    auto values = field_values(o.field, f, first, lab, species, dim);
+    auto values = analysis::particle_field(o.field, {f, first, lab, species, mass, dim});
     if (o.field == "fragment_id")  // targets held in place are not fragments: drawn pale grey (the colour of NaN)
       for (std::size_t i = 0; i < values.size(); ++i)
         if (target[i]) values[i] = std::numeric_limits<double>::quiet_NaN();

@@ -1,5 +1,6 @@
 // Fragments: union-find, clustering of intact bonds, irreversible breakage, reports from a real run.
 #include "pmfrag/analysis/fragments.hpp"
+#include "pmfrag/analysis/particle_fields.hpp"
 #include "pmfrag/analysis/union_find.hpp"
 #include "pmfrag/run.hpp"
 #include "pmfrag/system.hpp"
@@ -183,4 +184,28 @@ TEST(PowerLaw, TooFewFragmentsGiveNoExponentAndSayWhy) {
   EXPECT_FALSE(fit_discrete_power_law({2, 3, 5, 2, 8, 13, 2, 4, 1, 1, 1, 1}, why));
   EXPECT_NE(why.find("at least 10"), std::string::npos) << why;
   EXPECT_TRUE(fit_discrete_power_law(power_law_sample(2.0, 2, 10, 7), why)) << why;
+}
+
+TEST(ParticleFields, ValuesTheirUnitsAndUnknownNames) {
+  // Two particles in 2-D: one moved by (3, 4) cm at (6, 8) cm/s, one still.
+  TrajectoryFrame first, now;
+  first.position = {0.0, 0.0, 1.0, 0.0};
+  first.velocity = {0.0, 0.0, 0.0, 0.0};
+  now.position = {3.0, 4.0, 1.0, 0.0};
+  now.velocity = {6.0, 8.0, 0.0, 0.0};
+  analysis::FrameLabels labels;
+  labels.fragment_id = {0, 1};
+  labels.fragment_size = {1, 1};
+  labels.damage = {1.0, 0.5};
+  const std::vector<int> species{0, 1};
+  const std::vector<double> mass{2.0, 3.0};
+  const analysis::FieldFrame at{now, first, labels, species, mass, 2};
+  EXPECT_EQ(analysis::particle_field("displacement", at), (std::vector<double>{5.0, 0.0}));     // cm
+  EXPECT_EQ(analysis::particle_field("speed", at), (std::vector<double>{10.0, 0.0}));           // cm/s
+  EXPECT_EQ(analysis::particle_field("kinetic_energy", at), (std::vector<double>{100.0, 0.0}));  // erg
+  EXPECT_EQ(analysis::particle_field("phase", at), (std::vector<double>{0.0, 1.0}));
+  EXPECT_EQ(analysis::particle_field("fragment_id", at), (std::vector<double>{0.0, 1.0}));
+  EXPECT_EQ(analysis::particle_field("damage", at), (std::vector<double>{1.0, 0.5}));
+  for (const auto& name : analysis::particle_field_names()) EXPECT_EQ(analysis::particle_field(name, at).size(), 2u) << name;
+  EXPECT_THROW(analysis::particle_field("stress", at), std::invalid_argument);
 }

@@ -1,5 +1,6 @@
 #include "pmfrag/analysis/export_vtk.hpp"
 
+#include "pmfrag/analysis/particle_fields.hpp"
 #include "pmfrag/h5md.hpp"
 
 #include <vtkCellArray.h>
@@ -75,16 +76,17 @@ void write_frame(const fs::path& file, const Static& st, const TrajectoryFrame& 
   }
 
   auto* pd = grid->GetPointData();
-  if (want("id")) {
-    auto a = named<vtkIntArray>("id", 1, n);
-    for (vtkIdType i = 0; i < n; ++i) a->SetValue(i, static_cast<int>(i));
+  const FieldFrame at{f, first, lab, st.species, st.mass, st.dim};
+  // Counts as integers, the rest as doubles: each from particle_field (the values render colours by).
+  auto counts = [&](const char* name) {
+    if (!want(name)) return;
+    const std::vector<double> v = particle_field(name, at);
+    auto a = named<vtkIntArray>(name, 1, n);
+    for (vtkIdType i = 0; i < n; ++i) a->SetValue(i, static_cast<int>(v[static_cast<std::size_t>(i)]));
     pd->AddArray(a);
-  }
-  if (want("phase")) {
-    auto a = named<vtkIntArray>("phase", 1, n);
-    for (vtkIdType i = 0; i < n; ++i) a->SetValue(i, st.species[static_cast<std::size_t>(i)]);
-    pd->AddArray(a);
-  }
+  };
+  counts("id");
+  counts("phase");
   auto vec = [&](const char* name, auto&& get) {
     if (!want(name)) return;
     auto a = named<vtkDoubleArray>(name, 3, n);
@@ -97,30 +99,18 @@ void write_frame(const fs::path& file, const Static& st, const TrajectoryFrame& 
   };
   vec("displacement", [&](std::size_t k) { return f.position[k] - first.position[k]; });  // cm
   vec("velocity", [&](std::size_t k) { return f.velocity[k]; });                          // cm/s
-  auto scalar = [&](const char* name, auto&& get) {
+  auto scalar = [&](const char* name) {
     if (!want(name)) return;
+    const std::vector<double> v = particle_field(name, at);
     auto a = named<vtkDoubleArray>(name, 1, n);
-    for (std::size_t i = 0; i < st.n; ++i) a->SetValue(static_cast<vtkIdType>(i), get(i));
+    for (std::size_t i = 0; i < st.n; ++i) a->SetValue(static_cast<vtkIdType>(i), v[i]);
     pd->AddArray(a);
   };
-  auto speed2 = [&](std::size_t i) {
-    double s = 0;
-    for (std::size_t c = 0; c < d; ++c) s += f.velocity[i * d + c] * f.velocity[i * d + c];
-    return s;
-  };
-  scalar("speed", [&](std::size_t i) { return std::sqrt(speed2(i)); });                        // cm/s
-  scalar("kinetic_energy", [&](std::size_t i) { return 0.5 * st.mass[i] * speed2(i); });       // erg
-  scalar("damage", [&](std::size_t i) { return lab.damage[i]; });
-  if (want("fragment_id")) {
-    auto a = named<vtkIntArray>("fragment_id", 1, n);
-    for (vtkIdType i = 0; i < n; ++i) a->SetValue(i, lab.fragment_id[static_cast<std::size_t>(i)]);
-    pd->AddArray(a);
-  }
-  if (want("fragment_size")) {
-    auto a = named<vtkIntArray>("fragment_size", 1, n);
-    for (vtkIdType i = 0; i < n; ++i) a->SetValue(i, lab.fragment_size[static_cast<std::size_t>(i)]);
-    pd->AddArray(a);
-  }
+  scalar("speed");           // cm/s
+  scalar("kinetic_energy");  // erg
+  scalar("damage");
+  counts("fragment_id");
+  counts("fragment_size");
 
   auto* cd = grid->GetCellData();
   if (want("cell_kind")) {  // 0 = particle, 1 = bond
