@@ -97,17 +97,11 @@ Row run_one(const StudyCli& o, const std::string& knob, double value, const std:
   ro.out_dir = row.dir.string();
   ro.force = true;
   RunResult r;
-  const std::string before = slurp(row.dir / "run.json"), recorded = slurp(row.dir / "overrides.txt");
+  const std::string recorded = slurp(row.dir / "overrides.txt");
   std::string wanted = "# source: " + sc.file + "\n";
   for (const auto& s : sc.overrides) wanted += s + "\n";
-  if (o.reuse && !before.empty() && recorded == wanted) {  // the same scene and overrides ran here before
-    r.completed = before.find("\"completed\": true") != std::string::npos;
-    r.message = json_string(before, "message");
-    r.steps = static_cast<long>(json_number(before, "steps"));
-    r.particles = static_cast<std::size_t>(json_number(before, "particles"));
-    r.wall_s = json_number(before, "wall_s");
-    r.dt = json_number(before, "dt_s");
-    r.first_break_time = json_number(before, "first_break_time_s");
+  if (o.reuse && fs::exists(row.dir / "run.json") && recorded == wanted) {  // the same scene and overrides ran here before
+    r = read_run_record((row.dir / "run.json").string());
   } else {
     r = run_scene(sc, ro);
   }

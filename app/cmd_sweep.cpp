@@ -9,6 +9,7 @@
 #include "process.hpp"
 #include "run_files.hpp"
 #include "pmfrag/material.hpp"
+#include "pmfrag/run.hpp"
 #include "pmfrag/scene.hpp"
 #include "pmfrag/sweep.hpp"
 #include "pmfrag/system.hpp"
@@ -34,10 +35,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// summary.json's piece counts and mass distribution as sweep.csv cells: fragments, single_particles,
-// second_largest_mass_fraction, tau, its interval, how many pieces it fitted and from what mass (empty where
-// the fit gave none, or the case has no summary).
-std::string distribution_cells(const std::string& summary) {
+// summary.json as sweep.csv cells: onset and separation times, pieces of >= 2 particles and of >= 1 % of the
+// mass, the largest fraction, then all pieces, single particles, the second-largest fraction, tau, its
+// interval, how many pieces it fitted and from what mass (empty where the fit gave none, or the case has no
+// summary).
+std::string summary_cells(const std::string& summary) {
   const nlohmann::json j = nlohmann::json::parse(summary, nullptr, false);
   auto cell = [](const nlohmann::json& obj, const char* key) -> std::string {
     if (!obj.is_object() || !obj.contains(key) || !obj[key].is_number()) return "";
@@ -45,7 +47,10 @@ std::string distribution_cells(const std::string& summary) {
     std::snprintf(b, sizeof b, "%.6g", obj[key].get<double>());
     return b;
   };
-  std::string out = cell(j, "fragments") + "," + cell(j, "single_particles") + "," + cell(j, "second_largest_mass_fraction");
+  std::string out = cell(j, "onset_time_s") + "," + cell(j, "separation_time_s") + "," + cell(j, "fragments_2plus") +
+                    "," + cell(j, "fragments_1pct_mass") + "," + cell(j, "largest_mass_fraction") + "," +
+                    cell(j, "fragments") + "," + cell(j, "single_particles") + "," +
+                    cell(j, "second_largest_mass_fraction");
   const nlohmann::json d = j.is_object() && j.contains("distribution") ? j["distribution"] : nlohmann::json();
   const nlohmann::json ci = d.is_object() && d.contains("exponent_ci") ? d["exponent_ci"] : nlohmann::json();
   const auto bound = [&](std::size_t k) {
@@ -61,13 +66,20 @@ struct SweepCli {
   int jobs = 0;
 };
 
-bool finished(const fs::path& dir) {
-  return fs::exists(dir / "summary.json") && slurp(dir / "run.json").find("\"completed\": true") != std::string::npos;
+// run.json read back; a missing or unreadable one is a run that did not finish.
+RunResult run_record(const fs::path& dir) {
+  try {
+    return read_run_record((dir / "run.json").string());
+  } catch (const std::runtime_error&) {
+    return RunResult{};
+  }
 }
+
+bool finished(const fs::path& dir) { return fs::exists(dir / "summary.json") && run_record(dir).completed; }
 
 // Why a case failed, in its folder (error.txt) and on the terminal.
 void record_failure(const fs::path& dir, const std::string& name, int status, const std::string& who) {
-  std::string why = json_string(slurp(dir / "run.json"), "message");
+  std::string why = run_record(dir).message;
   if (why.empty()) {  // the last line the worker printed
     const std::string log = slurp(dir / "log.txt");
     auto end = log.find_last_not_of('\n');
@@ -197,14 +209,15 @@ void sweep(const SweepCli& o) {
     for (const auto& k : cases) {
       const fs::path dir = fs::path(o.out) / k.name;
       const Material m = derive_material(k.p, k.q, r0);
-      const std::string run = slurp(dir / "run.json"), sum = slurp(dir / "summary.json");
+      const RunResult run = run_record(dir);
+      const std::string sum = slurp(dir / "summary.json");
       std::string status = "completed";
       if (fs::exists(dir / "error.txt")) {
         status = slurp(dir / "error.txt");
         status.erase(status.find_last_not_of('\n') + 1);
         ++failed;
-      } else if (run.find("\"completed\": true") == std::string::npos) {
-        status = "stopped: " + json_string(run, "message");
+      } else if (!run.completed) {
+        status = "stopped: " + run.message;
       }
       for (char& ch : status)
         if (ch == '"') ch = '\'';
@@ -223,11 +236,8 @@ void sweep(const SweepCli& o) {
             f << ",\"" << v << "\"";
           }
       f << "," << val(m.E_GPa) << "," << val(m.sigma_TS_MNm2) << ","
-        << val(json_number(run, "dt_s")) << "," << val(json_number(sum, "onset_time_s")) << ","
-        << val(json_number(sum, "separation_time_s")) << "," << val(json_number(sum, "fragments_2plus")) << ","
-        << val(json_number(sum, "fragments_1pct_mass")) << "," << val(json_number(sum, "largest_mass_fraction")) << ","
-        << distribution_cells(sum) << "," << val(json_number(run, "particle_steps_per_s")) << "," << val(json_number(run, "wall_s")) << ",\"" << status
-        << "\"\n";
+        << val(run.dt) << "," << summary_cells(sum) << "," << val(run.particle_steps_per_s()) << "," << val(run.wall_s)
+        << ",\"" << status << "\"\n";
     }
     std::printf("wrote %s: %zu cases, %ld failed\n", csv.c_str(), cases.size(), failed);
   }

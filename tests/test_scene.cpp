@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <set>
 
 using namespace pmfrag;
@@ -263,4 +264,36 @@ end = 1e-6
   EXPECT_NE(what.find("key 'body[0].holes[0].radius': must be positive"), std::string::npos) << what;
   EXPECT_DOUBLE_EQ(parse_scene(text, "t.toml", {"body[0].holes[0].radius=0.3"}).bodies[0].holes[0].radius, 0.3);
   EXPECT_DOUBLE_EQ(parse_scene(text, "t.toml", {"body.0.r0=0.1"}).bodies[0].r0, 0.1);
+}
+
+// run.json is written from the run's result and read back into the same typed fields (sweeps and studies
+// gather runs this way); a file that is not a run record is refused, naming it.
+TEST(RunRecord, ReadsBackWhatTheRunWrote) {
+  const auto dir = test::temp_dir("run_record");
+  RunOptions ro;
+  ro.out_dir = (dir / "run").string();
+  ro.force = true;
+  const RunResult ran = run_scene(read_scene(test::case_path("impact.toml"), {"time.end=2e-5"}), ro);
+  const RunResult back = read_run_record((dir / "run" / "run.json").string());
+  EXPECT_TRUE(back.completed);
+  EXPECT_EQ(back.steps, ran.steps);
+  EXPECT_EQ(back.frames, ran.frames);
+  EXPECT_EQ(back.particles, ran.particles);
+  EXPECT_EQ(back.dt, ran.dt);  // doubles are written to round-trip exactly
+  EXPECT_EQ(back.dt_min, ran.dt_min);
+  EXPECT_EQ(back.wall_s, ran.wall_s);
+  EXPECT_EQ(back.pair_model, ran.pair_model);
+  EXPECT_EQ(back.first_break_time, ran.first_break_time);
+  EXPECT_EQ(back.threads(), ran.threads());
+  long steps = 0;
+  for (const long s : back.thread_steps) steps += s;
+  EXPECT_EQ(steps, ran.steps);
+  std::ofstream(dir / "bad.json") << "{ \"completed\": tru";
+  try {
+    read_run_record((dir / "bad.json").string());
+    ADD_FAILURE() << "a torn run.json was read";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.json"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir);
 }

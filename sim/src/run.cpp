@@ -5,10 +5,13 @@
 #include "pmfrag/leapfrog.hpp"
 #include "pmfrag/step_levels.hpp"
 
+#include <nlohmann/json.hpp>
+
 #include <chrono>
 #include <csignal>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -216,36 +219,41 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
     res.list_builds = bv.list_builds, res.skin = bv.skin;
   }
 
-  // run.json: what ran and how fast (for sweeps and benchmarks); written whole, then renamed.
+  // run.json: what ran and how fast (for sweeps and benchmarks; read back by read_run_record); written whole,
+  // then renamed.
   const fs::path tmp = dir / "run.json.tmp";
   {
+    nlohmann::ordered_json by_threads = nlohmann::ordered_json::object();
+    for (std::size_t t = 1; t < res.thread_steps.size(); ++t)
+      if (res.thread_steps[t] > 0) by_threads[std::to_string(t)] = res.thread_steps[t];
+    const nlohmann::ordered_json record = {
+        {"completed", res.completed},
+        {"interrupted", res.interrupted},
+        {"message", res.message},
+        {"particles", res.particles},
+        {"steps", res.steps},
+        {"frames", res.frames},
+        {"dt_s", res.dt},
+        {"dt_adaptive", res.adaptive},
+        {"dt_min_s", res.dt_min},
+        {"dt_limit_s", res.dt_limit},
+        {"wall_s", res.wall_s},
+        {"particle_steps_per_s", res.particle_steps_per_s()},
+        {"threads", res.threads()},
+        {"kernels", kernel_path()},
+        {"processor", processor_name()},
+        {"steps_by_threads", by_threads},
+        {"pair_model", res.pair_model},
+        {"first_break_time_s", res.first_break_time},
+        {"bond_events",
+         {{"broken", res.bonds_broken},
+          {"re_formed", res.bonds_re_formed},
+          {"beyond_cutoff_at_end", res.bonds_beyond_now},
+          {"rows", writer.bond_event_rows()}}},
+        {"neighbour_list_builds", res.list_builds},
+        {"verlet_skin_r0", res.skin / sys.r0}};
     std::ofstream js(tmp);
-    const auto text = [](const std::string& s) {  // a JSON string's characters
-      std::string out;
-      for (char c : s) out += (c == '"' || c == '\\' ? std::string("\\") + c : std::string(1, c));
-      return out;
-    };
-    js << "{\n  \"completed\": " << (res.completed ? "true" : "false")
-       << ",\n  \"interrupted\": " << (res.interrupted ? "true" : "false") << ",\n  \"message\": \"" << text(res.message);
-    js << "\",\n  \"particles\": " << res.particles << ",\n  \"steps\": " << res.steps
-       << ",\n  \"frames\": " << res.frames << ",\n  \"dt_s\": " << fmt("%.10g", dt)
-       << ",\n  \"dt_adaptive\": " << (adaptive ? "true" : "false") << ",\n  \"dt_min_s\": " << fmt("%.10g", res.dt_min)
-       << ",\n  \"dt_limit_s\": " << fmt("%.10g", limit) << ",\n  \"wall_s\": " << fmt("%.6g", res.wall_s)
-       << ",\n  \"particle_steps_per_s\": " << fmt("%.6g", res.particle_steps_per_s())
-       << ",\n  \"threads\": " << res.threads() << ",\n  \"kernels\": \"" << kernel_path() << "\""
-       << ",\n  \"processor\": \"" << text(processor_name()) << "\""
-       << ",\n  \"steps_by_threads\": {" << [&] {
-            std::string by;
-            for (std::size_t t = 1; t < res.thread_steps.size(); ++t)
-              if (res.thread_steps[t] > 0) by += (by.empty() ? "\"" : ", \"") + std::to_string(t) + "\": " + std::to_string(res.thread_steps[t]);
-            return by;
-          }() << "}"
-       << ",\n  \"pair_model\": \"" << res.pair_model << "\""
-       << ",\n  \"first_break_time_s\": " << fmt("%.10g", res.first_break_time)
-       << ",\n  \"bond_events\": {\"broken\": " << res.bonds_broken << ", \"re_formed\": " << res.bonds_re_formed
-       << ", \"beyond_cutoff_at_end\": " << res.bonds_beyond_now << ", \"rows\": " << writer.bond_event_rows() << "}"
-       << ",\n  \"neighbour_list_builds\": " << res.list_builds
-       << ",\n  \"verlet_skin_r0\": " << fmt("%.4g", res.skin / sys.r0) << "\n}\n";
+    js << record.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << "\n";
   }
   fs::rename(tmp, dir / "run.json");
   return res;
@@ -254,6 +262,53 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
 }  // namespace
 
 void request_stop() noexcept { stop_requested = 1; }
+
+RunResult read_run_record(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open the run record");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(path + ": not a run record (" + e.what() + ")");
+  }
+  if (!j.is_object()) throw std::runtime_error(path + ": not a run record (not a JSON object)");
+  // A number written as null (not finite) or absent keeps the default.
+  const auto number = [&](const nlohmann::json& at, const char* key, double fallback) {
+    return at.contains(key) && at[key].is_number() ? at[key].get<double>() : fallback;
+  };
+  const auto flag = [&](const char* key) { return j.contains(key) && j[key].is_boolean() && j[key].get<bool>(); };
+  RunResult r;
+  r.completed = flag("completed");
+  r.interrupted = flag("interrupted");
+  r.adaptive = flag("dt_adaptive");
+  if (j.contains("message") && j["message"].is_string()) r.message = j["message"].get<std::string>();
+  if (j.contains("pair_model") && j["pair_model"].is_string()) r.pair_model = j["pair_model"].get<std::string>();
+  r.particles = static_cast<std::size_t>(number(j, "particles", 0.0));
+  r.steps = static_cast<long>(number(j, "steps", 0.0));
+  r.frames = static_cast<long>(number(j, "frames", 0.0));
+  r.dt = number(j, "dt_s", 0.0);
+  r.dt_min = number(j, "dt_min_s", 0.0);
+  r.dt_limit = number(j, "dt_limit_s", 0.0);
+  r.wall_s = number(j, "wall_s", 0.0);
+  r.first_break_time = number(j, "first_break_time_s", -1.0);
+  r.list_builds = static_cast<long>(number(j, "neighbour_list_builds", 0.0));
+  if (j.contains("bond_events") && j["bond_events"].is_object()) {
+    const nlohmann::json& e = j["bond_events"];
+    r.bonds_broken = static_cast<long>(number(e, "broken", 0.0));
+    r.bonds_re_formed = static_cast<long>(number(e, "re_formed", 0.0));
+    r.bonds_beyond_now = static_cast<long>(number(e, "beyond_cutoff_at_end", 0.0));
+  }
+  if (j.contains("steps_by_threads") && j["steps_by_threads"].is_object())
+    for (const auto& [threads, steps] : j["steps_by_threads"].items()) {
+      char* end = nullptr;
+      const std::size_t t = std::strtoul(threads.c_str(), &end, 10);
+      if (*end || t == 0 || t > 4096 || !steps.is_number()) continue;
+      if (r.thread_steps.size() <= t) r.thread_steps.resize(t + 1, 0);
+      r.thread_steps[t] = steps.get<long>();
+    }
+  return r;
+}
 
 RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   const System sys = build_system(scene);

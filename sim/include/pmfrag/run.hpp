@@ -58,6 +58,10 @@ struct UnstableStepError : std::runtime_error {
 
 RunResult run_scene(const Scene& scene, const RunOptions& options);
 
+/// What a run folder's run.json records, read back (a sweep or study gathering its runs). Fields the file does
+/// not hold keep their defaults; a file that cannot be read or is not JSON throws std::runtime_error naming it.
+RunResult read_run_record(const std::string& path);
+
 /// By default a run measures how many threads its steps run fastest on (1, 2, 4, ... up to
 /// omp_get_max_threads(), each thread with at least 256 particles) and re-measures every so often; the
 /// trajectory is bitwise the same for any count. Setting this (or the environment's
