@@ -5,6 +5,7 @@
 #include "pmfrag/pair_law.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -216,17 +217,6 @@ double break_length(const H5mdReader& rd, const BreakCriterion& c) {
   return 0.0;
 }
 
-namespace {
-std::string json_escaped(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) continue;
-    out += c;
-  }
-  return out;
-}
-}  // namespace
 
 std::vector<std::uint8_t> target_particles(const H5mdReader& rd) {
   const auto held = rd.held(), body = rd.body();
@@ -392,27 +382,41 @@ void write_fragment_report(const FragmentReport& r, const std::string& dir_name)
   long singles = 0, multi = 0;
   for (const auto& g : r.final_fragments) (g.particles == 1 ? singles : multi) += 1;
   const TimelineRow& end = r.timeline.back();
+  nlohmann::ordered_json distribution = nullptr;
+  if (const auto& d = r.distribution)
+    distribution = {{"exponent", d->exponent},
+                    {"exponent_ci", {d->ci_low, d->ci_high}},
+                    {"m_min_g", d->s_min * r.particle_mass},
+                    {"s_min_particles", d->s_min},
+                    {"fragments_fitted", d->fitted},
+                    {"ks_distance", d->ks_distance},
+                    {"rule", power_law_rule()}};
+  const nlohmann::ordered_json summary = {
+      {"p", r.p},
+      {"q", r.q},
+      {"bond_state", r.bond_state},
+      {"break_criterion", r.criterion},
+      {"break_length_cm", r.threshold_cm},
+      {"frames", r.frames_read},
+      {"particles", r.particles},
+      {"target_particles", r.target_particles},
+      {"partial", r.partial},
+      {"note", r.note},
+      {"onset_time_s", r.onset_time},
+      {"separation_time_s", r.separation_time},
+      {"final_time_s", end.time},
+      {"broken_bonds", end.broken},
+      {"broken_bonds_engine", end.broken_engine >= 0 ? nlohmann::ordered_json(end.broken_engine) : nlohmann::ordered_json()},
+      {"fragments", end.fragments},
+      {"fragments_2plus", multi},
+      {"single_particles", singles},
+      {"fragments_1pct_mass", end.fragments_1pct},
+      {"largest_mass_fraction", end.largest_fraction},
+      {"second_largest_mass_fraction", r.second_largest_fraction},
+      {"distribution", distribution},
+      {"distribution_note", r.distribution_note}};
   write_atomically(dir / "summary.json", [&](std::ostream& o) {
-    o << "{\n  \"p\": " << r.p << ",\n  \"q\": " << r.q << ",\n  \"bond_state\": \"" << r.bond_state
-      << "\",\n  \"break_criterion\": \"" << r.criterion
-      << "\",\n  \"break_length_cm\": " << r.threshold_cm << ",\n  \"frames\": " << r.frames_read
-      << ",\n  \"particles\": " << r.particles << ",\n  \"target_particles\": " << r.target_particles
-      << ",\n  \"partial\": " << (r.partial ? "true" : "false") << ",\n  \"note\": \"" << json_escaped(r.note)
-      << "\",\n  \"onset_time_s\": " << r.onset_time << ",\n  \"separation_time_s\": " << r.separation_time
-      << ",\n  \"final_time_s\": " << end.time << ",\n  \"broken_bonds\": " << end.broken
-      << ",\n  \"broken_bonds_engine\": " << (end.broken_engine >= 0 ? std::to_string(end.broken_engine) : "null")
-      << ",\n  \"fragments\": " << end.fragments << ",\n  \"fragments_2plus\": " << multi
-      << ",\n  \"single_particles\": " << singles << ",\n  \"fragments_1pct_mass\": " << end.fragments_1pct
-      << ",\n  \"largest_mass_fraction\": " << end.largest_fraction
-      << ",\n  \"second_largest_mass_fraction\": " << r.second_largest_fraction << ",\n  \"distribution\": ";
-    if (const auto& d = r.distribution)
-      o << "{\"exponent\": " << d->exponent << ", \"exponent_ci\": [" << d->ci_low << ", " << d->ci_high
-        << "], \"m_min_g\": " << d->s_min * r.particle_mass << ", \"s_min_particles\": " << d->s_min
-        << ", \"fragments_fitted\": " << d->fitted << ", \"ks_distance\": " << d->ks_distance << ", \"rule\": \""
-        << power_law_rule() << "\"}";
-    else
-      o << "null";
-    o << ",\n  \"distribution_note\": \"" << json_escaped(r.distribution_note) << "\"\n}\n";
+    o << summary.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << "\n";
   });
 }
 
