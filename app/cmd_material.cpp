@@ -110,8 +110,11 @@ void run(const MaterialOptions& o) {
   if (o.pq.empty()) pairs = {{3, 5}, {5, 10}, {7, 14}};  // the paper's three (Table 1)
   for (const auto& s : o.pq) {
     const auto v = parse_ints("--pq", s, 2);
-    if (v[0] < 1) throw UsageError("--pq: p must be >= 1 (got '" + s + "')");
-    if (v[1] <= v[0]) throw UsageError("--pq: q must be greater than p (got '" + s + "')");
+    try {
+      validate_exponents(v[0], v[1]);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError("--pq " + s + ": " + e.what());
+    }
     pairs.push_back({v[0], v[1]});
   }
   std::vector<Material> mats;

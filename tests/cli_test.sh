@@ -32,6 +32,7 @@ bad() {  # bad NAME EXPECTED_WORD ARGS...
 }
 bad "q <= p" --pq material --pq 7,7
 bad "p < 1" --pq material --pq 0,5
+bad "q > 64, as run refuses it" "at most 64" material --pq 400,800 --json
 bad "r0 <= 0" --r0 material --r0 0
 bad "negative r0" --r0 material --r0 -0.2
 bad "malformed pq" --pq material --pq 7,x

@@ -21,9 +21,7 @@ double atom_count(double a, double b, double c) {
 }  // namespace
 
 Material derive_material(int p, int q, double r0, const Block& block) {
-  if (p < 1) throw std::invalid_argument("p must be >= 1 (got " + std::to_string(p) + ")");
-  if (q <= p)
-    throw std::invalid_argument("q must be > p (got p=" + std::to_string(p) + ", q=" + std::to_string(q) + ")");
+  validate_exponents(p, q);
   if (!(r0 > 0.0) || !std::isfinite(r0)) throw std::invalid_argument("r0 must be a positive length in cm");
   if (!(block.A >= r0) || !(block.B >= r0) || !(block.C >= r0) || !std::isfinite(block.A + block.B + block.C))
     throw std::invalid_argument("block must be at least one spacing r0 in every direction");
@@ -54,6 +52,13 @@ Material derive_material(int p, int q, double r0, const Block& block) {
   }
   const double G = H * std::pow(r0, static_cast<double>(p - q));  // F(r0) = 0 (Eq. 30); Eq. 33 misprints r0^(1-q)
   m.law = PairLaw{p, q, G, H};
+  try {  // r0^(q - 1) and r0^(p - q) leave double's range for large exponents at small r0 (or large at large)
+    m.law.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("the material model gives no usable law for (p,q) = (" + std::to_string(p) + "," +
+                                std::to_string(q) + ") at r0 = " + std::to_string(r0) + " cm (G = " +
+                                std::to_string(G) + ", H = " + std::to_string(H) + "): " + e.what());
+  }
 
   m.S0_dyne_per_cm = m.law.stiffness(r0);
   m.E_GPa = m.S0_dyne_per_cm / r0 * 1e-10;  // Eq. (26), dyne/cm^2 -> GPa

@@ -3,6 +3,7 @@
 
 #include <toml++/toml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -307,9 +308,11 @@ PhaseSpec read_phase(Tab t, int dim, std::size_t index, double r0) {
   PhaseSpec ph;
   ph.name = t.string("name", "phase" + std::to_string(index + 1));
   const long p = t.integer("p"), q = t.integer("q");
-  if (p < 1) t.fail_at(t.get("p"), "p", "p must be >= 1 (got " + std::to_string(p) + ")");
-  if (q <= p) t.fail_at(t.get("q"), "q", "q must be greater than p (got p = " + std::to_string(p) + ", q = " + std::to_string(q) + ")");
-  if (q > 64) t.fail_at(t.get("q"), "q", "q must be at most 64");
+  try {
+    validate_exponents(static_cast<int>(std::clamp(p, -1000000L, 1000000L)), static_cast<int>(std::clamp(q, -1000000L, 1000000L)));
+  } catch (const std::invalid_argument& e) {
+    t.fail_at(t.get(p < 1 ? "p" : "q"), p < 1 ? "p" : "q", e.what());
+  }
   ph.p = static_cast<int>(p);
   ph.q = static_cast<int>(q);
   if (t.has("G") || t.has("H") || t.has("mass")) {

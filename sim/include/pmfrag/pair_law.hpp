@@ -19,17 +19,27 @@ inline double ipow(double x, int n) noexcept {
   return result;
 }
 
+/// The largest exponent a law may have: the engine's kernels and the (p,q) sweeps stop there.
+inline constexpr int max_exponent = 64;
+
+/// Throws std::invalid_argument unless 1 <= p < q <= max_exponent: the one check of a law's exponents that
+/// scenes, the material model and the command line share.
+inline void validate_exponents(int p, int q) {
+  if (p < 1) throw std::invalid_argument("p must be >= 1 (got " + std::to_string(p) + ")");
+  if (q <= p) throw std::invalid_argument("q must be greater than p (got p = " + std::to_string(p) + ", q = " + std::to_string(q) + ")");
+  if (q > max_exponent)
+    throw std::invalid_argument("q must be at most " + std::to_string(max_exponent) + " (got " + std::to_string(q) + ")");
+}
+
 struct PairLaw {
   int p = 7;        ///< attractive exponent, p >= 1
   int q = 14;       ///< repulsive exponent, q > p
   double G = 0.0;   ///< attraction coefficient [dyne cm^p]
   double H = 0.0;   ///< repulsion coefficient [dyne cm^q]
 
-  /// Throws std::invalid_argument unless q > p >= 1 and G, H > 0 and finite.
+  /// Throws std::invalid_argument unless 1 <= p < q <= max_exponent and G, H > 0 and finite.
   void validate() const {
-    if (p < 1) throw std::invalid_argument("pair law: p must be >= 1 (got " + std::to_string(p) + ")");
-    if (q <= p)
-      throw std::invalid_argument("pair law: q must be > p (got p=" + std::to_string(p) + ", q=" + std::to_string(q) + ")");
+    validate_exponents(p, q);
     if (!(G > 0.0) || !std::isfinite(G)) throw std::invalid_argument("pair law: G must be positive and finite");
     if (!(H > 0.0) || !std::isfinite(H)) throw std::invalid_argument("pair law: H must be positive and finite");
   }
