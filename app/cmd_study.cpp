@@ -7,6 +7,7 @@
 #include "parse.hpp"
 #include "run_files.hpp"
 #include "pmfrag/analysis/fragments.hpp"
+#include "pmfrag/atomic_file.hpp"
 #include "pmfrag/h5md.hpp"
 #include "pmfrag/render/charts.hpp"
 #include "pmfrag/run.hpp"
@@ -213,8 +214,7 @@ void study_accuracy(const StudyCli& o) {
   }
 
   const fs::path csv = fs::path(o.out) / "accuracy.csv";
-  {
-    std::ofstream f(csv.string() + ".tmp");
+  write_file_atomically(csv, [&](std::ostream& f) {
     f << "knob,value,dt_s,r0_cm,particles,steps,wall_s,particle_steps_per_s,energy_error_of_work,"
          "position_error_rel,onset_s,onset_rel_error,separation_s,fragments,status\n";
     for (const auto& r : rows)
@@ -222,8 +222,7 @@ void study_accuracy(const StudyCli& o) {
         << "," << num(r.wall) << "," << num(r.pss) << "," << num(r.energy_error) << "," << num(r.position_error) << ","
         << num(r.onset) << "," << num(r.onset_error) << "," << num(r.separation) << "," << r.fragments << ",\""
         << r.status << "\"\n";
-  }
-  fs::rename(csv.string() + ".tmp", csv);
+  });
 
   render::ChartSpec chart;
   chart.title = "What accuracy costs: error against wall time (" + fs::path(o.scene).filename().string() + ")";

@@ -4,6 +4,7 @@
 // the block grows in x, and in all directions). Each figure is a PNG and a CSV of what it plots. Wiring only.
 #include "cmd_study.hpp"
 
+#include "pmfrag/atomic_file.hpp"
 #include "pmfrag/material.hpp"
 #include "pmfrag/render/charts.hpp"
 
@@ -14,6 +15,7 @@
 #include <limits>
 #include <memory>
 #include <stdexcept>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -28,12 +30,20 @@ const std::vector<std::array<int, 2>> fig_pairs{{1, 5}, {1, 10}, {1, 14}, {3, 5}
 
 std::string pq_name(int p, int q) { return "(" + std::to_string(p) + "," + std::to_string(q) + ")"; }
 
-std::ofstream open_csv(const fs::path& path) {
-  std::ofstream f(path);
-  if (!f) throw std::runtime_error(path.string() + ": cannot write");
-  f.precision(8);
-  return f;
-}
+// A table filled while a figure is computed, then written whole (write_file_atomically) by commit().
+struct Table {
+  fs::path path;
+  std::ostringstream text;
+  explicit Table(fs::path p) : path(std::move(p)) { text.precision(8); }
+  template <class T>
+  Table& operator<<(const T& v) {
+    text << v;
+    return *this;
+  }
+  void commit() const {
+    write_file_atomically(path, [&](std::ostream& o) { o << text.str(); });
+  }
+};
 
 void figures(const std::string& out) {
   const fs::path dir(out);
@@ -52,7 +62,7 @@ void figures(const std::string& out) {
                           std::vector<double>(14 * 14, nan)};
     render::HeatmapSpec S{"Fig. 3(b): tensile strength over (p,q) (Table 1 convention)", "p", "q", "sigma_TS [MN/m2]",
                           1, 2, 14, 14, std::vector<double>(14 * 14, nan)};
-    auto csv = open_csv(dir / "fig3.csv");
+    Table csv(dir / "fig3.csv");
     csv << "p,q,E_GPa,sigma_TS_paper_MNm2,sigma_TS_MNm2\n";
     for (const auto& [p, q] : fig3_grid()) {
       const Material m = derive_material(p, q, 0.2);
@@ -61,6 +71,7 @@ void figures(const std::string& out) {
       S.values[cell] = m.sigma_TS_paper_MNm2;
       csv << p << "," << q << "," << m.E_GPa << "," << m.sigma_TS_paper_MNm2 << "," << m.sigma_TS_MNm2 << "\n";
     }
+    csv.commit();
     render::render_heatmap_png(window, E, 800, 700, png("fig3_E.png"));
     render::render_heatmap_png(window, S, 800, 700, png("fig3_strength.png"));
   }
@@ -70,7 +81,7 @@ void figures(const std::string& out) {
   {
     const double r0 = 0.2;
     std::vector<render::Series> phi, force;
-    auto csv = open_csv(dir / "fig7.csv");
+    Table csv(dir / "fig7.csv");
     csv << "p,q,r_cm,potential_erg,force_dyne\n";
     for (const auto& [p, q] : std::vector<std::array<int, 2>>{{3, 5}, {5, 10}, {7, 14}}) {
       const Material m = derive_material(p, q, r0);
@@ -83,6 +94,7 @@ void figures(const std::string& out) {
       }
       phi.push_back(a), force.push_back(b);
     }
+    csv.commit();
     render::render_chart_png(window, {"Fig. 7(a): pair potential, r0 = 0.2 cm", "r [cm]", "potential [1e8 erg]", false, false, phi},
                              900, 650, png("fig7_potential.png"));
     render::render_chart_png(window,
@@ -94,7 +106,7 @@ void figures(const std::string& out) {
   // Fig. 8: E against r0 = 0.1..0.5 cm for the paper's block (8 x 11.43 x 3.1 cm).
   {
     std::vector<render::Series> curves;
-    auto csv = open_csv(dir / "fig8.csv");
+    Table csv(dir / "fig8.csv");
     csv << "p,q,r0_cm,nodes,E_GPa\n";
     for (const auto& [p, q] : fig_pairs) {
       render::Series s{pq_name(p, q), {}, {}};
@@ -106,6 +118,7 @@ void figures(const std::string& out) {
       }
       curves.push_back(s);
     }
+    csv.commit();
     render::render_chart_png(window,
                              {"Fig. 8: E against r0, block 8 x 11.43 x 3.1 cm", "r0 [cm]", "E [GPa]", false, false, curves},
                              900, 650, png("fig8_E_vs_r0.png"));
@@ -115,7 +128,7 @@ void figures(const std::string& out) {
   {
     const double r0 = 0.2;
     std::vector<render::Series> curves;
-    auto csv = open_csv(dir / "fig10.csv");
+    Table csv(dir / "fig10.csv");
     csv << "p,q,n_x,E_GPa\n";
     for (const auto& [p, q] : fig_pairs) {
       render::Series s{pq_name(p, q), {}, {}};
@@ -126,6 +139,7 @@ void figures(const std::string& out) {
       }
       curves.push_back(s);
     }
+    csv.commit();
     render::render_chart_png(window,
                              {"Fig. 10: E as the block grows in x (25 r0 in y and z), r0 = 0.2 cm",
                               "block length in x [units of r0]", "E [GPa]", false, false, curves},
@@ -136,7 +150,7 @@ void figures(const std::string& out) {
   {
     const double r0 = 0.2;
     render::Series s{"(7,14), n r0 in x, y and z", {}, {}};
-    auto csv = open_csv(dir / "fig11.csv");
+    Table csv(dir / "fig11.csv");
     csv << "n_x,n_y,n_z,E_GPa\n";
     for (int n = 1; n <= 60; ++n) {
       const double E = derive_material(7, 14, r0, Block{n * r0, n * r0, n * r0}).E_GPa;
@@ -156,6 +170,7 @@ void figures(const std::string& out) {
         map.values.push_back(E);
         csv << nx << "," << ny << ",25," << E << "\n";
       }
+    csv.commit();
     render::render_heatmap_png(window, map, 800, 700, png("fig11_E_xy.png"));
   }
   std::printf("wrote to %s:", dir.c_str());

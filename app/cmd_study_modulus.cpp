@@ -4,6 +4,7 @@
 // the lateral contraction gives the Poisson ratio. Wiring only: the test is studies::tensile_test.
 #include "cmd_study.hpp"
 
+#include "pmfrag/atomic_file.hpp"
 #include "pmfrag/studies/tensile.hpp"
 
 #include <cmath>
@@ -36,11 +37,12 @@ void modulus(const std::string& out, int scale) {
       rows.push_back(r);
     }
   const fs::path csv = dir / "modulus.csv";
-  std::ofstream f(csv);
-  f << "dim,p,q,particles,E_eq26_GPa,E_fit_GPa,ratio,poisson,max_strain,fit_rms_rel\n";
-  for (const auto& r : rows)
-    f << r.dim << "," << r.p << "," << r.q << "," << r.particles << "," << r.E_eq26 << "," << r.E_fit << ","
-      << r.E_fit / r.E_eq26 << "," << r.poisson << "," << r.strain << "," << r.fit_rms << "\n";
+  write_file_atomically(csv, [&](std::ostream& f) {
+    f << "dim,p,q,particles,E_eq26_GPa,E_fit_GPa,ratio,poisson,max_strain,fit_rms_rel\n";
+    for (const auto& r : rows)
+      f << r.dim << "," << r.p << "," << r.q << "," << r.particles << "," << r.E_eq26 << "," << r.E_fit << ","
+        << r.E_fit / r.E_eq26 << "," << r.poisson << "," << r.strain << "," << r.fit_rms << "\n";
+  });
   std::printf("wrote %s (2-D stresses use a thickness of r0; see docs/accuracy.md, \"Virtual tensile test\")\n",
               csv.c_str());
 }

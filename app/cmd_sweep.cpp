@@ -8,6 +8,7 @@
 #include "mpi_world.hpp"
 #include "process.hpp"
 #include "run_files.hpp"
+#include "pmfrag/atomic_file.hpp"
 #include "pmfrag/material.hpp"
 #include "pmfrag/run.hpp"
 #include "pmfrag/scene.hpp"
@@ -87,7 +88,7 @@ void record_failure(const fs::path& dir, const std::string& name, int status, co
     why = end == std::string::npos ? "no output" : log.substr(from == std::string::npos ? 0 : from + 1, end - from);
   }
   if (WIFSIGNALED(status)) why = "killed by signal " + std::to_string(WTERMSIG(status)) + "; " + why;
-  std::ofstream(dir / "error.txt") << why << "\n";
+  write_file_atomically(dir / "error.txt", [&](std::ostream& f) { f << why << "\n"; });
   std::printf("%s  %-24s FAILED: %s\n", who.c_str(), name.c_str(), why.c_str());
 }
 
@@ -197,15 +198,14 @@ void sweep(const SweepCli& o) {
 
   if (!lead) return;  // rank 0 gathers every case's folder into sweep.csv
   const fs::path csv = fs::path(o.out) / "sweep.csv";
-  {
-    std::ofstream f(csv.string() + ".tmp");
+  long failed = 0;
+  write_file_atomically(csv, [&](std::ostream& f) {
     // A column per varied key after (p,q); the mass distribution's exponent and its interval after the counts.
     f << "case,p,q";
     for (const auto& [key, values] : spec.vary) f << "," << key;
     f << ",E_GPa,sigma_TS_MNm2,dt_s,onset_s,separation_s,fragments_2plus,fragments_1pct_mass,"
          "largest_mass_fraction,fragments,single_particles,second_largest_mass_fraction,tau,tau_ci_low,tau_ci_high,"
          "tau_fragments_fitted,tau_m_min_g,particle_steps_per_s,wall_s,status\n";
-    long failed = 0;
     for (const auto& k : cases) {
       const fs::path dir = fs::path(o.out) / k.name;
       const Material m = derive_material(k.p, k.q, r0);
@@ -239,9 +239,8 @@ void sweep(const SweepCli& o) {
         << val(run.dt) << "," << summary_cells(sum) << "," << val(run.particle_steps_per_s()) << "," << val(run.wall_s)
         << ",\"" << status << "\"\n";
     }
-    std::printf("wrote %s: %zu cases, %ld failed\n", csv.c_str(), cases.size(), failed);
-  }
-  fs::rename(csv.string() + ".tmp", csv);
+  });
+  std::printf("wrote %s: %zu cases, %ld failed\n", csv.c_str(), cases.size(), failed);
 }
 
 }  // namespace

@@ -11,10 +11,14 @@
 
 #include <CLI/CLI.hpp>
 
+#include <csignal>
 #include <cstdio>
 #include <exception>
 
 int main(int argc, char** argv) {
+  // A write past a file-size limit (ulimit -f) then fails with EFBIG, which the writers report with the file's
+  // name, instead of killing the process before it can say anything.
+  std::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{
       "pmfrag - particle modeling (Wang & Ostoja-Starzewski 2005, after Greenspan) of dynamic fracture and "
       "fragmentation: material model, simulation, fragments, ParaView export and figures."};

@@ -1,6 +1,7 @@
 #include "pmfrag/analysis/export_vtk.hpp"
 
 #include "pmfrag/analysis/particle_fields.hpp"
+#include "pmfrag/atomic_file.hpp"
 #include "pmfrag/h5md.hpp"
 
 #include <vtkCellArray.h>
@@ -141,9 +142,7 @@ void write_frame(const fs::path& file, const Static& st, const TrajectoryFrame& 
     if (force) cd->AddArray(fo);
   }
 
-  const fs::path tmp = file.string() + ".tmp";
   vtkNew<vtkXMLUnstructuredGridWriter> w;
-  w->SetFileName(tmp.c_str());
   w->SetInputData(grid);
   w->SetDataModeToAppended();
   w->EncodeAppendedDataOff();
@@ -155,14 +154,14 @@ void write_frame(const fs::path& file, const Static& st, const TrajectoryFrame& 
       break;
     case Compression::none: w->SetCompressorTypeToNone(); break;
   }
-  if (w->Write() != 1 || w->GetErrorCode() != 0) throw std::runtime_error(file.string() + ": VTK writer failed");
-  fs::rename(tmp, file);
+  write_file_atomically_by_name(file, [&](const fs::path& tmp) {
+    w->SetFileName(tmp.c_str());
+    return w->Write() == 1 && w->GetErrorCode() == 0;
+  });
 }
 
 void write_pvd(const fs::path& path, const std::vector<std::pair<double, std::string>>& frames, const std::string& partial) {
-  const fs::path tmp = path.string() + ".tmp";
-  {
-    std::ofstream o(tmp);
+  write_file_atomically(path, [&](std::ostream& o) {
     o.precision(17);
     o << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
          "  <Collection>\n";
@@ -174,9 +173,7 @@ void write_pvd(const fs::path& path, const std::vector<std::pair<double, std::st
     }
     for (const auto& [t, file] : frames) o << "    <DataSet timestep=\"" << t << "\" part=\"0\" file=\"" << file << "\"/>\n";
     o << "  </Collection>\n</VTKFile>\n";
-    if (!o) throw std::runtime_error(path.string() + ": write failed");
-  }
-  fs::rename(tmp, path);
+  });
 }
 
 }  // namespace

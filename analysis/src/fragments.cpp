@@ -1,6 +1,7 @@
 #include "pmfrag/analysis/fragments.hpp"
 
 #include "pmfrag/analysis/union_find.hpp"
+#include "pmfrag/atomic_file.hpp"
 #include "pmfrag/h5md.hpp"
 #include "pmfrag/pair_law.hpp"
 
@@ -180,17 +181,13 @@ std::vector<Fragment> describe_fragments(const FrameLabels& l, const TrajectoryF
   return out;
 }
 
+// The tables with ten significant digits, each whole or absent (write_file_atomically).
 template <class F>
 void write_atomically(const std::filesystem::path& path, F&& body) {
-  const std::filesystem::path tmp = path.string() + ".tmp";
-  {
-    std::ofstream out(tmp);
-    if (!out) throw std::runtime_error(path.string() + ": cannot write");
+  write_file_atomically(path, [&](std::ostream& out) {
     out.precision(10);
     body(out);
-    if (!out) throw std::runtime_error(path.string() + ": write failed");
-  }
-  std::filesystem::rename(tmp, path);
+  });
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "pmfrag/run.hpp"
 
+#include "pmfrag/atomic_file.hpp"
 #include "pmfrag/build_info.hpp"
 #include "pmfrag/h5md.hpp"
 #include "pmfrag/leapfrog.hpp"
@@ -60,10 +61,11 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
     fs::remove(dir / "run.json");
     fs::remove(ckpt);
     // The scene as read and its overrides, beside the trajectory, so --resume needs nothing else.
-    std::ofstream(dir / "scene.toml") << scene.source;
-    std::ofstream ov(dir / "overrides.txt");
-    ov << "# source: " << scene.file << "\n";
-    for (const auto& o : scene.overrides) ov << o << "\n";
+    write_file_atomically(dir / "scene.toml", [&](std::ostream& s) { s << scene.source; });
+    write_file_atomically(dir / "overrides.txt", [&](std::ostream& ov) {
+      ov << "# source: " << scene.file << "\n";
+      for (const auto& o : scene.overrides) ov << o << "\n";
+    });
   }
   std::unique_ptr<H5mdWriter> writer_ptr = from ? std::make_unique<H5mdWriter>(traj.string(), from->frames, from->bond_events)
                                                 : std::make_unique<H5mdWriter>(traj.string(), sys, scene, rp);
@@ -219,9 +221,7 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
     res.list_builds = bv.list_builds, res.skin = bv.skin;
   }
 
-  // run.json: what ran and how fast (for sweeps and benchmarks; read back by read_run_record); written whole,
-  // then renamed.
-  const fs::path tmp = dir / "run.json.tmp";
+  // run.json: what ran and how fast (for sweeps and benchmarks; read back by read_run_record).
   {
     nlohmann::ordered_json by_threads = nlohmann::ordered_json::object();
     for (std::size_t t = 1; t < res.thread_steps.size(); ++t)
@@ -252,10 +252,10 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
           {"rows", writer.bond_event_rows()}}},
         {"neighbour_list_builds", res.list_builds},
         {"verlet_skin_r0", res.skin / sys.r0}};
-    std::ofstream js(tmp);
-    js << record.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << "\n";
+    write_file_atomically(dir / "run.json", [&](std::ostream& js) {
+      js << record.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << "\n";
+    });
   }
-  fs::rename(tmp, dir / "run.json");
   return res;
 }
 

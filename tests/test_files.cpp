@@ -1,0 +1,93 @@
+// Outputs are whole or absent: write_file_atomically under faults (a file-size limit, a missing folder, a body
+// that throws) leaves the previous file as it was, no temporary behind, and says which file and why.
+#include "pmfrag/atomic_file.hpp"
+
+#include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+using namespace pmfrag;
+namespace fs = std::filesystem;
+
+namespace {
+std::string content(const fs::path& p) {
+  std::ifstream in(p);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("pmfrag_files_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+bool only_file_in(const fs::path& dir, const std::string& name) {
+  int n = 0;
+  for (const auto& e : fs::directory_iterator(dir)) n += 1 + (e.path().filename() != name) * 100;
+  return n == 1;
+}
+}  // namespace
+
+TEST(AtomicFile, WritesAndReplacesWhole) {
+  const fs::path d = fresh_dir("replace"), f = d / "summary.json";
+  write_file_atomically(f, [](std::ostream& o) { o << "first\n"; });
+  EXPECT_EQ(content(f), "first\n");
+  write_file_atomically(f, [](std::ostream& o) { o << "second\n"; });
+  EXPECT_EQ(content(f), "second\n");
+  EXPECT_TRUE(only_file_in(d, "summary.json"));
+  fs::remove_all(d);
+}
+
+TEST(AtomicFile, AFileSizeLimitLeavesThePreviousFileAndNamesTheCause) {
+  // The disk-full case without a full disk: RLIMIT_FSIZE makes write() fail (EFBIG) past 4 KiB. SIGXFSZ,
+  // which would kill the process there, is ignored as pmfrag's main does.
+  const fs::path d = fresh_dir("fsize"), f = d / "fragments_final.csv";
+  write_file_atomically(f, [](std::ostream& o) { o << "good table\n"; });
+  auto* previous_handler = std::signal(SIGXFSZ, SIG_IGN);
+  rlimit before{};
+  ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &before), 0);
+  rlimit small = before;
+  small.rlim_cur = 4096;
+  ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &small), 0);
+  std::string what;
+  try {
+    write_file_atomically(f, [](std::ostream& o) { o << std::string(100000, 'x'); });
+  } catch (const std::runtime_error& e) {
+    what = e.what();
+  }
+  ::setrlimit(RLIMIT_FSIZE, &before);
+  std::signal(SIGXFSZ, previous_handler);
+  EXPECT_NE(what.find(f.string()), std::string::npos) << what;
+  EXPECT_NE(what.find("File too large"), std::string::npos) << what;
+  EXPECT_EQ(content(f), "good table\n") << "the previous file was touched";
+  EXPECT_TRUE(only_file_in(d, "fragments_final.csv")) << "a temporary file was left behind";
+  fs::remove_all(d);
+}
+
+TEST(AtomicFile, AMissingFolderOrAFailingBodyWritesNothing) {
+  const fs::path d = fresh_dir("missing");
+  try {
+    write_file_atomically(d / "no_such_folder" / "run.json", [](std::ostream& o) { o << "{}"; });
+    ADD_FAILURE() << "wrote into a folder that does not exist";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("No such file or directory"), std::string::npos) << e.what();
+  }
+  const fs::path f = d / "sweep.csv";
+  write_file_atomically(f, [](std::ostream& o) { o << "kept\n"; });
+  EXPECT_THROW(write_file_atomically(f, [](std::ostream& o) {
+                 o << "half";
+                 throw std::runtime_error("the body failed");
+               }),
+               std::runtime_error);
+  EXPECT_EQ(content(f), "kept\n");
+  EXPECT_TRUE(only_file_in(d, "sweep.csv"));
+  fs::remove_all(d);
+}
