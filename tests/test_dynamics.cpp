@@ -400,7 +400,8 @@ namespace {
 // 1:3 shares, and with shares that change between blocks of steps (as the load balancer moves them), `steps`
 // steps of sc must end bitwise where plain steps on one thread end, observables included. check: what
 // the plain run must have gone through for the comparison to mean something.
-void expect_resident_steps_bitwise_plain(const Scene& sc, long steps, const std::function<void(const BondView<2>&)>& check) {
+void expect_resident_steps_bitwise_plain(const Scene& sc, long steps, const std::function<void(const BondView<2>&)>& check,
+                                         double least_resident = 0.0) {
   const System sys = build_system(sc);
   const double dt = choose_step(sc, sys).dt;
   auto flat = [](const Leapfrog<2>& lf) {
@@ -435,6 +436,8 @@ void expect_resident_steps_bitwise_plain(const Scene& sc, long steps, const std:
     ASSERT_EQ(lf.state().step, steps);
     ASSERT_GE(lf.thread_steps().size(), 3u);
     EXPECT_EQ(lf.thread_steps()[2], steps);
+    EXPECT_GE(static_cast<double>(lf.resident_steps_taken()), least_resident * static_cast<double>(steps))
+        << "steps in resident blocks";
     const auto got = flat(lf);
     ASSERT_EQ(got.size(), want.size());
     EXPECT_EQ(std::memcmp(got.data(), want.data(), got.size() * sizeof(double)), 0) << weights.size() << " weights";
@@ -460,6 +463,20 @@ TEST(Dynamics, ResidentStepsAreBitwiseThePlainOnes) {
     ASSERT_GT(v.first_break_step, 0) << "the test needs bonds to break";
     ASSERT_GT(v.list_builds, 10) << "the test needs the contact list to be rebuilt";
   });
+}
+
+TEST(Dynamics, EveryDeclaredEffectRunsInResidentStepsBitwiseAsPlain) {
+  // Gravity, damping and Greenspan's alpha are local forces (stage::local_force): each thread applies them to
+  // its own particles inside a resident block, in attachment order after the bonds. Declared together, the
+  // quiet steps must still run resident (most of them: a list due or a broken bond ends a block) and end
+  // bitwise where plain steps on one thread end.
+  const Scene every = read_scene(test::case_path("slit_plate_7_14.toml"),
+                                 {"gravity.g=[0.0, -980.0]", "damping.gamma=50.0", "greenspan_alpha.enabled=true",
+                                  "kinematic.0.velocity=[0.0, 2000.0]", "kinematic.1.velocity=[0.0, -2000.0]"});
+  expect_resident_steps_bitwise_plain(
+      every, 3000,
+      [](const BondView<2>& v) { ASSERT_GT(v.list_builds, 1) << "the test needs the contact list to be rebuilt"; },
+      0.5);
 }
 
 TEST(Dynamics, ResidentStepsOfTheCutoffReadingAreBitwiseThePlainOnes) {

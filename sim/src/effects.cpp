@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 namespace pmfrag {
 
@@ -46,16 +47,18 @@ class Kinematic final : public Effect<D> {
   void setup(State<D>& s) override {
     for (int i : index_) s.v[static_cast<std::size_t>(i)] = u_, s.inv_mass[static_cast<std::size_t>(i)] = 0.0;
   }
+  // A plain step is a resident block of one step on one thread: the tally is written once.
   void add_forces(State<D>& s) override {
-    if (s.step == tallied_step_) return;  // forces re-evaluated at the same step (checkpoint): count once
-    for (std::size_t b = 0; b < block_.size(); ++b) partial_[b * 8] = block_power(s, b);
-    tally(s.step, s.dt);
+    whole_[1] = static_cast<long>(s.size());
+    resident_begin(s, whole_);
+    resident_gather(s, 0);
+    resident_end(s);
   }
   // Resident steps: each thread keeps its blocks' g of every step, and the steps are tallied in order once the
   // block of steps is over (resident_end). Read by one thread every step, the other threads' sums cost it a
   // transfer between cores each (~0.2 us on this VM) before it could go on.
   bool resident_begin(State<D>&, const std::vector<long>& bounds) override {
-    bounds_ = bounds;
+    bounds_ = bounds;  // (assigned into its capacity: no allocation after the first block)
     if (history_.size() != block_.size()) {
       history_.resize(block_.size());
       for (auto& h : history_) h.g.reserve(1024);
@@ -70,7 +73,8 @@ class Kinematic final : public Effect<D> {
         history_[b].g.push_back(block_power(s, b));
   }
   void resident_end(State<D>& s) override {
-    // the steps whose forces every thread gathered: s.step - k + 1 ... s.step, tallied as add_forces would
+    // the steps whose forces every thread gathered: s.step - k + 1 ... s.step. A step already tallied (forces
+    // evaluated again at the same step, at a checkpoint) counts once.
     const std::size_t k = history_.empty() ? 0 : history_.front().g.size();
     for (std::size_t j = 0; j < k; ++j) {
       const long step = s.step - static_cast<long>(k - 1 - j);
@@ -114,6 +118,7 @@ class Kinematic final : public Effect<D> {
   std::vector<std::size_t> block_from_;   ///< block b's particles: index_[block_from_[b], block_from_[b + 1])
   std::vector<double> partial_;           ///< g of block b at [8 b] (erg/s)
   std::vector<long> bounds_;              ///< resident steps: the team's partition
+  std::vector<long> whole_{0, 0};         ///< a plain step's partition: every particle on one thread
   struct alignas(64) History {             ///< a cache line per block: each is written by its thread
     std::vector<double> g;                 ///< the block's g in each step of the resident block (erg/s)
   };
@@ -122,17 +127,35 @@ class Kinematic final : public Effect<D> {
   long tallied_step_ = -1;
 };
 
+// The local forces below work on the flat N x D arrays with one coefficient per degree of freedom, so each
+// is one vectorized stream (as Eigen's per-particle 2-vectors, each took longer than the whole move: perf on
+// the plate, 2026-12-03). Each coefficient is the product the per-particle form computed, so the bits are the
+// same.
+template <int D>
+AlignedVector<double> per_dof(const System& sys, const std::function<double(std::size_t i, int d)>& c) {
+  AlignedVector<double> out(sys.size() * D);
+  for (std::size_t i = 0; i < sys.size(); ++i)
+    for (int d = 0; d < D; ++d) out[i * D + static_cast<std::size_t>(d)] = c(i, d);
+  return out;
+}
+inline double particle_mass(const System& sys, std::size_t i) {
+  return sys.phase_mass[static_cast<std::size_t>(sys.phase[i])];
+}
+
+/// Gravity m g: a constant force per degree of freedom.
 template <int D>
 class Gravity final : public Effect<D> {
  public:
   using V = Eigen::Matrix<double, D, 1>;
-  explicit Gravity(const Vec3& g) : g_(head<D>(g)) {}
+  Gravity(const System& sys, const Vec3& g)
+      : g_(head<D>(g)), mg_(per_dof<D>(sys, [&](std::size_t i, int d) { return particle_mass(sys, i) * g[d]; })) {}
   std::string name() const override { return "gravity"; }
-  unsigned stages() const override { return stage::force | stage::observe; }
-  void add_forces(State<D>& s) override {
-    detail::for_particles(s.size(), [&](long first, long last, int) {
-      for (long k = first; k < last; ++k) s.f[static_cast<std::size_t>(k)] += s.mass[static_cast<std::size_t>(k)] * g_;
-    });
+  unsigned stages() const override { return stage::local_force | stage::observe; }
+  void local_forces(State<D>& s, const double*, long first, long last) override {
+    double* __restrict f = s.f.front().data();
+    const double* __restrict mg = mg_.data();
+#pragma omp simd
+    for (long j = first * D; j < last * D; ++j) f[j] += mg[j];
   }
   void observe(const State<D>& s, Observables& o) const override {
     double pe = 0.0;  // -m g . x
@@ -142,24 +165,27 @@ class Gravity final : public Effect<D> {
 
  private:
   V g_;
+  AlignedVector<double> mg_;  ///< dyne: m g per degree of freedom
 };
 
 /// Viscous damping -gamma m v, with v the latest half-step velocity.
 template <int D>
 class Damping final : public Effect<D> {
  public:
-  explicit Damping(double gamma) : gamma_(gamma) {}
+  Damping(const System& sys, double gamma)
+      : gamma_m_(per_dof<D>(sys, [&](std::size_t i, int) { return gamma * particle_mass(sys, i); })) {}
   std::string name() const override { return "damping"; }
-  unsigned stages() const override { return stage::force; }
-  void add_forces(State<D>& s) override {
-    detail::for_particles(s.size(), [&](long first, long last, int) {
-      for (long k = first; k < last; ++k)
-        s.f[static_cast<std::size_t>(k)] -= gamma_ * s.mass[static_cast<std::size_t>(k)] * s.v[static_cast<std::size_t>(k)];
-    });
+  unsigned stages() const override { return stage::local_force; }
+  void local_forces(State<D>& s, const double*, long first, long last) override {
+    double* __restrict f = s.f.front().data();
+    const double* __restrict v = s.v.front().data();
+    const double* __restrict gm = gamma_m_.data();
+#pragma omp simd
+    for (long j = first * D; j < last * D; ++j) f[j] -= gm[j] * v[j];
   }
 
  private:
-  double gamma_;
+  AlignedVector<double> gamma_m_;  ///< g/s: gamma m per degree of freedom
 };
 
 /// Greenspan's Eq. (10): the interaction is scaled by a = 0.001 x 980 m / |F(D)| per particle, making it
@@ -168,23 +194,22 @@ class Damping final : public Effect<D> {
 template <int D>
 class GreenspanAlpha final : public Effect<D> {
  public:
-  explicit GreenspanAlpha(const System& sys) {
-    for (std::size_t i = 0; i < sys.size(); ++i) {
-      const int ph = sys.phase[i];
-      const PairLaw& law = sys.law(ph, ph);
-      alpha_.push_back(0.98 * sys.phase_mass[static_cast<std::size_t>(ph)] / std::fabs(law.force(sys.cutoff)));
-    }
-  }
+  explicit GreenspanAlpha(const System& sys)
+      : alpha_(per_dof<D>(sys, [&](std::size_t i, int) {
+          const int ph = sys.phase[i];
+          return 0.98 * particle_mass(sys, i) / std::fabs(sys.law(ph, ph).force(sys.cutoff));
+        })) {}
   std::string name() const override { return "greenspan_alpha"; }
-  unsigned stages() const override { return stage::force; }
-  void add_forces(State<D>& s) override {
-    detail::for_particles(s.size(), [&](long first, long last, int) {
-      for (long k = first; k < last; ++k) s.f[static_cast<std::size_t>(k)] *= alpha_[static_cast<std::size_t>(k)];
-    });
+  unsigned stages() const override { return stage::local_force; }
+  void local_forces(State<D>& s, const double*, long first, long last) override {
+    double* __restrict f = s.f.front().data();
+    const double* __restrict a = alpha_.data();
+#pragma omp simd
+    for (long j = first * D; j < last * D; ++j) f[j] *= a[j];
   }
 
  private:
-  std::vector<double> alpha_;
+  AlignedVector<double> alpha_;  ///< per degree of freedom
 };
 
 }  // namespace
@@ -197,8 +222,8 @@ std::vector<std::unique_ptr<Effect<D>>> make_effects(const System& sys, const Sc
     if (!scene.pair) throw SceneError(scene.file + ": greenspan_alpha scales the pair force, but no [pair] is declared");
     out.push_back(std::make_unique<GreenspanAlpha<D>>(sys));
   }
-  if (scene.gravity) out.push_back(std::make_unique<Gravity<D>>(*scene.gravity));
-  if (scene.damping) out.push_back(std::make_unique<Damping<D>>(scene.damping->gamma));
+  if (scene.gravity) out.push_back(std::make_unique<Gravity<D>>(sys, *scene.gravity));
+  if (scene.damping) out.push_back(std::make_unique<Damping<D>>(sys, scene.damping->gamma));
   for (std::size_t k = 0; k < scene.kinematic.size(); ++k)
     out.push_back(std::make_unique<Kinematic<D>>(sys, scene.kinematic[k], k));
   return out;

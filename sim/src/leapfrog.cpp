@@ -80,7 +80,11 @@ Leapfrog<D>::Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>>
       throw std::logic_error(e->name() + ": its fused forces would come before those assigning the forces");
     }
     if (st & stage::fused_force) fused_force_.push_back(e.get());
-    if (st & stage::force) force_.push_back(e.get());
+    if (st & (stage::force | stage::local_force)) {
+      force_.push_back(e.get());
+      force_local_.push_back((st & stage::local_force) != 0);
+    }
+    if (st & (stage::resident | stage::local_force)) thread_forces_.push_back({e.get(), (st & stage::local_force) != 0});
     if (st & stage::after_move) after_move_.push_back(e.get());
     if (st & stage::observe) observe_.push_back(e.get());
     if (st & stage::step_limit) step_limit_.push_back(e.get());
@@ -126,7 +130,29 @@ template <int D>
 void Leapfrog<D>::compute_forces() {
   std::fill(s_.f.begin(), s_.f.end(), V::Zero());
   for (auto* e : fused_force_) e->add_fused_forces(s_);
-  for (auto* e : force_) e->add_forces(s_);
+  add_forces();
+}
+
+// The force stage in attachment order. Consecutive local forces run in one pass of the team, each thread on
+// its share, so they cost a hand-out together, not one each.
+template <int D>
+void Leapfrog<D>::add_forces() {
+  for (std::size_t k = 0; k < force_.size();) {
+    if (!force_local_[k]) {
+      force_[k++]->add_forces(s_);
+      continue;
+    }
+    std::size_t end = k;
+    while (end < force_.size() && force_local_[end]) ++end;
+    detail::Team& team = detail::Team::get(s_.size());
+    const std::vector<long>& b = team.bounds(static_cast<long>(s_.size()));
+    const double* x = s_.x.front().data();
+    team.run([&](int tid) {
+      for (std::size_t j = k; j < end; ++j)
+        force_[j]->local_forces(s_, x, b[static_cast<std::size_t>(tid)], b[static_cast<std::size_t>(tid) + 1]);
+    });
+    k = end;
+  }
 }
 
 template <int D>
@@ -239,7 +265,7 @@ void Leapfrog<D>::finish_step(double dt, int threads) {
   s_.t = uniform_ ? static_cast<double>(s_.step) * dt : s_.t + dt;
   const double max_step = std::sqrt(D * max2);
   for (auto* e : after_move_) e->after_move(s_, max_step);
-  for (auto* e : force_) e->add_forces(s_);  // f holds the fused forces (added to the zeros the move left, or set by them)
+  add_forces();  // f holds the fused forces (added to the zeros the move left, or set by them)
 }
 
 template <int D>
@@ -326,9 +352,13 @@ long Leapfrog<D>::resident_steps(detail::Team& team, long steps) {
       }
       const std::uint64_t t0 = detail::busy_clock();
       long mine = 0;
-      for (auto* e : resident_) {
-        e->resident_moved(max_step, tid);
-        mine += e->resident_forces(s_, x[(j + 1) & 1], tid);
+      for (auto* e : resident_) e->resident_moved(max_step, tid);
+      const long first = share[static_cast<std::size_t>(tid)], last = share[static_cast<std::size_t>(tid) + 1];
+      for (const ThreadForce& e : thread_forces_) {  // in attachment order, as add_forces
+        if (e.local)
+          e.effect->local_forces(s_, x[(j + 1) & 1], first, last);
+        else
+          mine += e.effect->resident_forces(s_, x[(j + 1) & 1], tid);
       }
       for (auto* e : resident_) e->resident_gather(s_, tid);
       busy += detail::busy_clock() - t0;
@@ -340,6 +370,7 @@ long Leapfrog<D>::resident_steps(detail::Team& team, long steps) {
   // s.x holds the positions of the last step whose forces are complete
   if (done & 1) std::swap(s_.x, x_alt_);
   s_.step += done;
+  resident_taken_ += done;
   s_.t = static_cast<double>(s_.step) * dt;
   balancer_->add(team, share, busy_.data(), line_doubles, done);
   for (auto* e : resident_) e->resident_end(s_);

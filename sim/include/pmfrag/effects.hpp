@@ -62,6 +62,10 @@ inline constexpr unsigned resident = 1u << 6;
 /// if no effect has fused forces): its forces set every particle's force (f = 0 + its forces) instead of
 /// adding to it, so the move need not zero f first (one stream through memory fewer)
 inline constexpr unsigned assigns_forces = 1u << 7;
+/// forces on each particle from that particle alone (its mass, position, velocity and the forces added
+/// before it): written once, as local_forces over a range of particles, and run by every thread on its own
+/// share in plain and resident steps alike, in attachment order among the other forces. Needs no other stage.
+inline constexpr unsigned local_force = 1u << 8;
 }  // namespace stage
 
 template <int D>
@@ -73,6 +77,9 @@ class Effect {
   virtual unsigned stages() const = 0;
   virtual void setup(State<D>&) {}
   virtual void add_forces(State<D>&) {}
+  /// stage::local_force: the forces on particles [first, last) at the positions x (N x D; s.x's outside
+  /// resident steps), added to (or applied to) s.f. Called by one thread per range; touches nothing else.
+  virtual void local_forces(State<D>&, const double* /*x*/, long /*first*/, long /*last*/) {}
   /// stage::fused_force: adds forces at r_k (already moved to, but s.step, s.t not yet advanced; may run
   /// on positions the guard then rejects, so it changes nothing but s.f and buffers of its own: what
   /// follows from those forces, e.g. retiring broken bonds, waits for add_forces).

@@ -68,9 +68,12 @@ class Leapfrog {
   const std::vector<std::unique_ptr<Effect<D>>>& effects() const { return effects_; }
   /// Steps taken on each thread count (index: threads); the count is measured, not fixed (thread_tuner.hpp).
   const std::vector<long>& thread_steps() const;
+  /// Steps that ran inside resident blocks (many steps to one pass of the team), not on the plain path.
+  long resident_steps_taken() const { return resident_taken_; }
 
  private:
   void compute_forces();  ///< all forces at r_k, from zero
+  void add_forces();      ///< the force stage (stage::force and stage::local_force effects, in order)
   /// Thread tid's share of the move, positions read from xin and written to xout (may be the same).
   void move(int tid, const std::vector<long>& share, double h, double dt, const double* xin, double* xout);
   int plain_step(double dt);  ///< one step, one team pass (returns the threads used)
@@ -92,8 +95,16 @@ class Leapfrog {
   AlignedVector<double> moves_;  ///< per thread, a cache line: the last move's largest squared component, bad
                                ///< count (and, in resident steps, the events its last forces found)
   std::vector<Effect<D>*> resident_;
+  std::vector<char> force_local_;  ///< per force_ entry: a local force (stage::local_force)
+  /// resident steps: the effects whose forces a thread computes on its share (resident or local), in order
+  struct ThreadForce {
+    Effect<D>* effect;
+    bool local;  ///< stage::local_force (else stage::resident)
+  };
+  std::vector<ThreadForce> thread_forces_;
   bool resident_ok_ = true;     ///< every effect acting in a step has resident steps
   bool assigned_ = false;       ///< the step's first forces set f (stage::assigns_forces): the move keeps it
+  long resident_taken_ = 0;  ///< steps completed inside resident blocks
   bool uniform_ = true;  ///< every step so far had the same dt: time = step x dt exactly
   std::unique_ptr<detail::ThreadTuner> tuner_;  ///< how many threads each step runs on
   std::unique_ptr<detail::LoadBalancer> balancer_;  ///< each thread's share of the particles
