@@ -4,7 +4,6 @@
 #include "pmfrag/build_info.hpp"
 #include "pmfrag/run.hpp"
 
-#include <omp.h>
 #include <unistd.h>
 
 #include <csignal>
@@ -40,7 +39,6 @@ extern "C" void on_stop_signal(int) { request_stop(); }
 constexpr int exit_interrupted = 130;
 
 void run(const RunCli& o) {
-  if (o.threads > 0) omp_set_num_threads(o.threads);
   std::signal(SIGINT, on_stop_signal);
   std::signal(SIGTERM, on_stop_signal);
   if (o.resume.empty() && (o.scene.empty() || o.out.empty()))
@@ -50,6 +48,7 @@ void run(const RunCli& o) {
   ro.out_dir = o.resume.empty() ? o.out : o.resume;
   ro.allow_unstable = o.allow_unstable;
   ro.force = o.force;
+  ro.threads = thread_options_from_environment(o.threads);
   if (!o.quiet) ro.log = [](const std::string& line) { std::fprintf(stderr, "pmfrag: %s\n", line.c_str()); };
   const bool tty = isatty(fileno(stderr));
   double last_plain = -1e9;

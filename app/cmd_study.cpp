@@ -13,7 +13,6 @@
 #include "pmfrag/run.hpp"
 #include "pmfrag/system.hpp"
 
-#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -97,6 +96,7 @@ Row run_one(const StudyCli& o, const std::string& knob, double value, const std:
   RunOptions ro;
   ro.out_dir = row.dir.string();
   ro.force = true;
+  ro.threads = thread_options_from_environment(o.threads);
   RunResult r;
   const std::string recorded = slurp(row.dir / "overrides.txt");
   std::string wanted = "# source: " + sc.file + "\n";
@@ -127,7 +127,6 @@ Row run_one(const StudyCli& o, const std::string& knob, double value, const std:
 }
 
 void study_accuracy(const StudyCli& o) {
-  if (o.threads > 0) omp_set_num_threads(o.threads);
   const Scene sc = read_scene(o.scene, o.set);
   const System sys = build_system(sc);
   const double limit = choose_step(sc, sys).limit;

@@ -8,7 +8,6 @@
 #include "test_helpers.hpp"
 
 #include <gtest/gtest.h>
-#include <omp.h>
 
 #include <cmath>
 #include <cstring>
@@ -73,10 +72,10 @@ TEST(BondStencil, MergedOffsetsGiveTheForcesOfOneGroupPerOffset) {
   ASSERT_GT(scale, 1e3) << "dyn: the jitter should load the bonds";
   std::vector<double> first;
   for (int threads : {1, 2}) {
-    omp_set_num_threads(threads);
+    detail::Team team(threads);
     std::vector<double> fm(3 * n, 0.0), fs(3 * n, 0.0);
-    EXPECT_EQ(merged.add_forces(x.data(), fm.data(), fixed, cut2, inv_rmin), 0);
-    EXPECT_EQ(separate.add_forces(x.data(), fs.data(), fixed, cut2, inv_rmin), 0);
+    EXPECT_EQ(merged.add_forces(team, x.data(), fm.data(), fixed, cut2, inv_rmin), 0);
+    EXPECT_EQ(separate.add_forces(team, x.data(), fs.data(), fixed, cut2, inv_rmin), 0);
     double vs_separate = 0.0, vs_plain = 0.0;
     for (std::size_t k = 0; k < 3 * n; ++k)
       vs_separate = std::max(vs_separate, std::abs(fm[k] - fs[k])), vs_plain = std::max(vs_plain, std::abs(fm[k] - plain[k]));
@@ -88,7 +87,6 @@ TEST(BondStencil, MergedOffsetsGiveTheForcesOfOneGroupPerOffset) {
     else
       EXPECT_EQ(std::memcmp(first.data(), fm.data(), fm.size() * sizeof(double)), 0) << "1 and 2 threads";
   }
-  omp_set_num_threads(omp_get_num_procs());
 }
 
 // A scene of several phases (the shipped inclusion: a (3,5) matrix, a (7,14) inclusion, a weaker (3,5)
@@ -148,9 +146,9 @@ TEST(BondStencil, SeveralLawsGiveEachBondItsOwnLaw) {
     ASSERT_GT(scale, 1e3) << "dyn: the jitter should load the bonds";
     std::vector<double> first;
     for (int threads : {1, 2}) {
-      omp_set_num_threads(threads);
+      detail::Team team(threads);
       std::vector<double> f(2 * n, 0.0);
-      EXPECT_EQ(stencil.add_forces(x.data(), f.data(), many, cut2, inv_rmin), 0);
+      EXPECT_EQ(stencil.add_forces(team, x.data(), f.data(), many, cut2, inv_rmin), 0);
       double worst = 0.0;
       for (std::size_t k = 0; k < 2 * n; ++k) worst = std::max(worst, std::abs(f[k] - plain[k]));
       EXPECT_LT(worst, 1e-12 * scale) << threads << " thread(s)";
@@ -159,7 +157,6 @@ TEST(BondStencil, SeveralLawsGiveEachBondItsOwnLaw) {
       else
         EXPECT_EQ(std::memcmp(first.data(), f.data(), f.size() * sizeof(double)), 0) << "1 and 2 threads";
     }
-    omp_set_num_threads(omp_get_num_procs());
   };
   check(sys.laws, true);
   // the inclusion's law with another repulsive exponent: no table, the scalar loop

@@ -6,7 +6,6 @@
 #include "test_helpers.hpp"
 
 #include <gtest/gtest.h>
-#include <omp.h>
 
 #include <cmath>
 #include <cstring>
@@ -257,9 +256,10 @@ TEST(Dynamics, BlockBondForcesMatchAPlainSumOverBonds) {
   for (auto& p : sys.position)
     for (int d = 0; d < 3; ++d) p[d] += jitter(rng);
   for (int threads : {1, 2}) {
-    omp_set_num_threads(threads);
-    ASSERT_EQ(step_threads(sys.size()), threads);
-    const auto lf = test::make_leapfrog<3>(sys, sc, sc.time.dt);
+    ThreadOptions given;
+    given.max = threads;
+    ASSERT_EQ(given.threads_for(sys.size()), threads) << "the block is big enough for the static rule";
+    const auto lf = test::make_leapfrog<3>(sys, sc, sc.time.dt, given);
     std::vector<Eigen::Vector3d> f(sys.size(), Eigen::Vector3d::Zero());
     for (const auto& b : sys.bonds) {
       const std::size_t i = static_cast<std::size_t>(b[0]), j = static_cast<std::size_t>(b[1]);
@@ -275,7 +275,6 @@ TEST(Dynamics, BlockBondForcesMatchAPlainSumOverBonds) {
     EXPECT_GT(scale, 1e3) << "dyn: the jitter should load the bonds";
     EXPECT_LT(worst, 1e-9 * scale) << threads << " thread(s)";
   }
-  omp_set_num_threads(omp_get_num_procs());
 }
 
 TEST(Dynamics, CutoffListKeepsEveryPairWithinDAsTheLatticeCollapses) {
@@ -355,28 +354,24 @@ namespace {
 // Runs `steps` steps of a scene with a given thread count and returns the final positions and velocities.
 template <int D = 2>
 std::vector<double> final_state(const Scene& sc, int threads, long steps) {
-  omp_set_num_threads(threads);
   const System sys = build_system(sc);
   const double dt = choose_step(sc, sys).dt;
-  auto lf = test::make_leapfrog<D>(sys, sc, dt);
+  auto lf = test::make_leapfrog<D>(sys, sc, dt, test::split_among(threads));
   for (long k = 0; k < steps; ++k) lf.step();
   std::vector<double> out;
   for (std::size_t i = 0; i < lf.state().size(); ++i)
     for (int d = 0; d < D; ++d) out.push_back(lf.state().x[i][d]), out.push_back(lf.state().v[i][d]);
-  omp_set_num_threads(omp_get_num_procs());
   return out;
 }
 }  // namespace
 
 TEST(Dynamics, OneAndTwoThreadsAreBitwiseIdentical) {
-  set_min_particles_per_thread(1);  // really split these small scenes between two threads
   // The impact: the disc meets the plate at 3e-3 s and contact pairs form and part.
   const Scene impact = read_scene(test::case_path("impact.toml"));
   // The (3,5) plate under the cutoff reading: pairs form and break by the hundred after 3.5e-3 s.
   const Scene collapse = read_scene(test::case_path("slit_plate_3_5.toml"), {"pair.model=\"cutoff\""});
   for (const auto& [sc, steps] : {std::pair{impact, 40000L}, std::pair{collapse, 40000L}}) {
-    omp_set_num_threads(2);
-    ASSERT_EQ(step_threads(build_system(sc).size()), 2);
+    ASSERT_EQ(test::split_among(2).threads_for(build_system(sc).size()), 2);
     const auto a = final_state(sc, 1, steps);
     const auto b = final_state(sc, 2, steps);
     ASSERT_EQ(a.size(), b.size());
@@ -386,8 +381,7 @@ TEST(Dynamics, OneAndTwoThreadsAreBitwiseIdentical) {
   // thread evaluates a long stretch of the first one's bonds itself, and off-stencil bonds (at the slit)
   // shared by both.
   const Scene block = read_scene(test::case_path("block3d_slit.toml"));
-  omp_set_num_threads(2);
-  ASSERT_EQ(step_threads(build_system(block).size()), 2);
+  ASSERT_EQ(test::split_among(2).threads_for(build_system(block).size()), 2);
   const auto a = final_state<3>(block, 1, 200);
   const auto b = final_state<3>(block, 2, 200);
   ASSERT_EQ(a.size(), b.size());
@@ -413,9 +407,7 @@ void expect_resident_steps_bitwise_plain(const Scene& sc, long steps, const std:
                            static_cast<double>(o.pairs_beyond_cutoff)});
     return out;
   };
-  set_min_particles_per_thread(1);
-  omp_set_num_threads(1);
-  auto plain = test::make_leapfrog<2>(sys, sc, dt);
+  auto plain = test::make_leapfrog<2>(sys, sc, dt, test::split_among(1));
   for (long k = 0; k < steps; ++k) plain.step();
   const auto want = flat(plain);
   const BondView<2> broke = bond_view(*plain.effects().front());
@@ -423,14 +415,12 @@ void expect_resident_steps_bitwise_plain(const Scene& sc, long steps, const std:
   std::vector<BondEvent> want_events;
   take_bond_events<2>(*plain.effects().front(), want_events);
   EXPECT_EQ(static_cast<long>(want_events.size()), broke.broke + broke.re_formed);
-  omp_set_num_threads(2);
   const std::vector<std::vector<double>> changing = {{1.0, 3.0}, {3.0, 1.0}, {1.0, 1.0}, {2.0, 1.0}};
   for (const std::vector<double>& weights : {std::vector<double>{}, std::vector<double>{1.0, 3.0}, std::vector<double>{0.0}}) {
     const bool change = weights.size() == 1;  // {0}: the shares change every block of 250 steps
-    set_thread_weights(change ? changing.front() : weights);
-    auto lf = test::make_leapfrog<2>(sys, sc, dt);
+    auto lf = test::make_leapfrog<2>(sys, sc, dt, test::split_among(2, change ? changing.front() : weights));
     for (long k = 0; k < steps; k += 250) {
-      if (change) set_thread_weights(changing[static_cast<std::size_t>(k / 250) % changing.size()]);
+      if (change) lf.set_thread_weights(changing[static_cast<std::size_t>(k / 250) % changing.size()]);
       EXPECT_EQ(lf.advance(std::min(250L, steps - k)), std::min(250L, steps - k));
     }
     ASSERT_EQ(lf.state().step, steps);
@@ -448,9 +438,6 @@ void expect_resident_steps_bitwise_plain(const Scene& sc, long steps, const std:
     EXPECT_TRUE(events == want_events) << "the record of bond events: " << events.size() << " against "
                                        << want_events.size() << " (" << weights.size() << " weights)";
   }
-  set_thread_weights({});
-  set_min_particles_per_thread(0);
-  omp_set_num_threads(omp_get_num_procs());
 }
 }  // namespace
 
@@ -499,8 +486,7 @@ namespace {
 std::vector<BondEvent> expect_record_is_every_change(const Scene& sc, long steps) {
   const System sys = build_system(sc);
   const bool cutoff = sc.pair->model == PairModel::cutoff;
-  omp_set_num_threads(1);
-  auto lf = test::make_leapfrog<2>(sys, sc, choose_step(sc, sys).dt);
+  auto lf = test::make_leapfrog<2>(sys, sc, choose_step(sc, sys).dt, test::split_among(1));
   const double cut2 = sys.cutoff * sys.cutoff;
   std::vector<std::uint8_t> within(sys.bonds.size(), 1);
   std::vector<BondEvent> want, got;
@@ -530,7 +516,6 @@ std::vector<BondEvent> expect_record_is_every_change(const Scene& sc, long steps
                     << ", re_formed " << want[k].re_formed << ")";
       break;
     }
-  omp_set_num_threads(omp_get_num_procs());
   return got;
 }
 }  // namespace
@@ -568,10 +553,10 @@ TEST(Dynamics, MeasuredThreadCountLeavesTheTrajectoryBitwiseUnchanged) {
   const Scene sc = read_scene(test::case_path("impact.toml"));
   const long steps = 40000;
   const auto alone = final_state(sc, 1, steps);
-  set_min_particles_per_thread(0);  // measure (another test may have fixed the rule)
-  omp_set_num_threads(2);
+  ThreadOptions measured;  // min_particles_per_thread 0: the count is measured
+  measured.max = 2;
   const System sys = build_system(sc);
-  auto lf = test::make_leapfrog<2>(sys, sc, choose_step(sc, sys).dt);
+  auto lf = test::make_leapfrog<2>(sys, sc, choose_step(sc, sys).dt, measured);
   for (long k = 0; k < steps; ++k) lf.step();
   const std::vector<long>& by = lf.thread_steps();
   ASSERT_GE(by.size(), 3u);
@@ -585,13 +570,10 @@ TEST(Dynamics, MeasuredThreadCountLeavesTheTrajectoryBitwiseUnchanged) {
   ASSERT_EQ(tuned.size(), alone.size());
   EXPECT_EQ(std::memcmp(tuned.data(), alone.data(), tuned.size() * sizeof(double)), 0);
   // A fixed rule is not measured: every step on the threads it gives.
-  set_min_particles_per_thread(1);
-  auto fixed = test::make_leapfrog<2>(sys, sc, choose_step(sc, sys).dt);
+  auto fixed = test::make_leapfrog<2>(sys, sc, choose_step(sc, sys).dt, test::split_among(2));
   for (long k = 0; k < 500; ++k) fixed.step();
   ASSERT_GE(fixed.thread_steps().size(), 3u);
   EXPECT_EQ(fixed.thread_steps()[2], 500);
-  set_min_particles_per_thread(0);
-  omp_set_num_threads(omp_get_num_procs());
 }
 
 namespace {

@@ -42,8 +42,17 @@ inline std::filesystem::path temp_dir(const std::string& name) {
 }
 
 template <int D>
-Leapfrog<D> make_leapfrog(const System& sys, const Scene& sc, double dt) {
-  return Leapfrog<D>(sys, make_effects<D>(sys, sc), dt);
+Leapfrog<D> make_leapfrog(const System& sys, const Scene& sc, double dt, ThreadOptions threads = {}) {
+  return Leapfrog<D>(sys, make_effects<D>(sys, sc), dt, false, std::move(threads));
+}
+
+/// Exactly `threads` threads, whatever the body's size (the 1-vs-2-thread comparisons split small scenes).
+inline ThreadOptions split_among(int threads, std::vector<double> weights = {}) {
+  ThreadOptions o;
+  o.max = threads;
+  o.min_particles_per_thread = 1;
+  o.weights = std::move(weights);
+  return o;
 }
 
 }  // namespace pmfrag::test

@@ -53,15 +53,14 @@ TEST(LoadBalancer, SmallGainsDoNotMoveTheShares) {
 }
 
 TEST(LoadBalancer, GivenWeightsAreKept) {
-  set_thread_weights({1.0, 3.0});
   Team team(2);
+  team.set_fixed_weights({1.0, 3.0});
   const std::vector<long> given = team.bounds(plate);
   EXPECT_EQ(given, (std::vector<long>{0, 704, plate}));  // a quarter, to the nearest grain
   LoadBalancer lb;
   const auto busy = busy_per_thread(1.0e4, 3.0e4);
   lb.add(team, given, busy.data(), 8, 2 * LoadBalancer::window);
   EXPECT_EQ(team.bounds(plate), given);
-  set_thread_weights({});
 }
 
 }  // namespace

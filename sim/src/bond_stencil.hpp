@@ -203,12 +203,11 @@ class BondStencil {
       sparse_alive_[static_cast<std::size_t>(k)] = alive;
   }
 
-  /// Adds bond forces to f (N x D, interleaved). Returns a positive number if some intact bond was found
+  /// Adds bond forces to f (N x D, interleaved), split among `team`'s threads. Returns a positive number if some intact bond was found
   /// longer than sqrt(cut2) (a bond near a thread boundary may be counted twice): the caller retires them.
   template <class Law>
-  long add_forces(const double* x, double* f, const Law& law, double cut2, double inv_rmin) {
+  long add_forces(Team& team, const double* x, double* f, const Law& law, double cut2, double inv_rmin) {
     std::atomic<long> broke{0};
-    Team& team = Team::get(n_);
     prepare(team.bounds(static_cast<long>(n_)));
     team.run([&](int tid) {
       const long mine = add_forces_of(tid, x, f, law, cut2, inv_rmin);

@@ -53,8 +53,10 @@ template <bool ZeroF, bool Uniform>
 }  // namespace
 
 template <int D>
-Leapfrog<D>::Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>> effects, double dt, bool adaptive)
-    : effects_(std::move(effects)), uniform_(!adaptive), tuner_(std::make_unique<detail::ThreadTuner>(sys.size())),
+Leapfrog<D>::Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>> effects, double dt, bool adaptive,
+                      ThreadOptions threads)
+    : effects_(std::move(effects)), uniform_(!adaptive), threads_(std::make_unique<detail::Threads>(std::move(threads))),
+      tuner_(std::make_unique<detail::ThreadTuner>(*threads_, sys.size())),
       balancer_(std::make_unique<detail::LoadBalancer>()) {
   const std::size_t n = sys.size();
   s_.dt = dt;
@@ -93,6 +95,7 @@ Leapfrog<D>::Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>>
     constexpr unsigned acts = stage::force | stage::after_move | stage::fused_force;
     if ((st & acts) && !(st & stage::resident)) resident_ok_ = false;
   }
+  use_team();
   for (auto& e : effects_)
     if (e->stages() & stage::setup) e->setup(s_);
   // After setup: kinematic boundaries zero their particles' inverse mass. A body of one mass has two inverse
@@ -127,6 +130,18 @@ const std::vector<long>& Leapfrog<D>::thread_steps() const {
 }
 
 template <int D>
+void Leapfrog<D>::set_thread_weights(std::vector<double> weights) {
+  threads_->set_weights(std::move(weights));
+}
+
+// The team of the count the tuner chose, handed to the effects with the state.
+template <int D>
+detail::Team& Leapfrog<D>::use_team() {
+  s_.team = &threads_->team(tuner_->count());
+  return *s_.team;
+}
+
+template <int D>
 void Leapfrog<D>::compute_forces() {
   std::fill(s_.f.begin(), s_.f.end(), V::Zero());
   for (auto* e : fused_force_) e->add_fused_forces(s_);
@@ -144,7 +159,7 @@ void Leapfrog<D>::add_forces() {
     }
     std::size_t end = k;
     while (end < force_.size() && force_local_[end]) ++end;
-    detail::Team& team = detail::Team::get(s_.size());
+    detail::Team& team = *s_.team;
     const std::vector<long>& b = team.bounds(static_cast<long>(s_.size()));
     const double* x = s_.x.front().data();
     team.run([&](int tid) {
@@ -220,7 +235,7 @@ int Leapfrog<D>::plain_step(double dt) {
   const long n = static_cast<long>(s_.size());
   if (dt != s_.dt) uniform_ = false;
   const double h = s_.step == 0 ? 0.5 * dt : 0.5 * (s_.dt + dt);  // == dt exactly for equal steps
-  detail::Team& team = detail::Team::get(s_.size());
+  detail::Team& team = use_team();
   const int threads = team.size();
   moves_.resize(static_cast<std::size_t>(threads) * line_doubles, 0.0);
   const std::vector<long>& share = team.bounds(n);
@@ -273,7 +288,7 @@ long Leapfrog<D>::advance(long steps) {
   long k = 0;
   while (k < steps) {
     long room = std::min(tuner_->before_steps(), steps - k);
-    detail::Team& team = detail::Team::get(s_.size());
+    detail::Team& team = use_team();
     long took = 0;
     if (team.size() > 1 && resident_ok_ && uniform_ && s_.step > 0) {
       room = std::min(room, std::max(1L, balancer_->room()));
@@ -409,6 +424,7 @@ Observables Leapfrog<D>::observe() const {
 
 template <int D>
 void Leapfrog<D>::canonicalize() {
+  use_team();
   for (auto& e : effects_) e->canonicalize(s_);
   compute_forces();
 }

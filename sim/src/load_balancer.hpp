@@ -31,7 +31,7 @@ class LoadBalancer {
   /// time in it. Decides, once a window is full, whether to move the team's shares (Team::set_balance).
   void add(Team& team, const std::vector<long>& bounds, const double* busy, std::size_t stride, long steps) {
     const std::size_t threads = bounds.size() - 1;
-    if (steps <= 0 || threads < 2 || Team::weights_fixed(static_cast<int>(threads))) return;
+    if (steps <= 0 || threads < 2 || team.weights_fixed()) return;
     if (bounds != bounds_) {  // a new partition (or team): measure it afresh
       bounds_ = bounds;
       busy_.assign(threads, 0.0);

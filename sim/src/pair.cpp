@@ -93,7 +93,7 @@ class PairEffect final : public Effect<D> {
   void add_fused_forces(State<D>& s) override {
     const double cut2 = cutoff_ * cutoff_;
     broke_ = detail::with_law(laws_, law_table_, nphase_ == 1, [&](const auto& law) {
-      return stencil_.add_forces(s.x.front().data(), s.f.front().data(), law, cut2, inv_rmin_);
+      return stencil_.add_forces(*s.team, s.x.front().data(), s.f.front().data(), law, cut2, inv_rmin_);
     });
   }
 
@@ -106,7 +106,7 @@ class PairEffect final : public Effect<D> {
     if (uses_list_ && list_.size() > 0) {
       detail::with_law(laws_, law_table_, nphase_ == 1, [&](const auto& law) {
         if (spec_.model == PairModel::cutoff)  // the Verlet list of a lattice is a stencil too
-          return list_stencil_.add_forces(s.x.front().data(), s.f.front().data(), law, cut2, inv_rmin_);
+          return list_stencil_.add_forces(*s.team, s.x.front().data(), s.f.front().data(), law, cut2, inv_rmin_);
         contact_kernel(s, law.with_ids(list_.law.data()));
         return 0L;
       });
@@ -462,14 +462,14 @@ class PairEffect final : public Effect<D> {
     // The team's rule for particles holds for pairs too: too few contacts for a second thread (before
     // fracture, the pairs across a slit) are summed here without waking the team. The sums are the same
     // either way (each particle's order is fixed).
-    detail::Team& team = detail::Team::get(s.size());
+    detail::Team& team = *s.team;
     auto body = [&](int tid, int nt) {
       const auto [first, last] = detail::share(m, tid, nt);
       contact_pair_forces(s, law, first, last);
       if (nt > 1) team.barrier(tid);  // the gather reads every thread's pair forces
       list_.gather(f, tid, nt);
     };
-    if (detail::Team::threads_for(static_cast<std::size_t>(m)) == 1)
+    if (team.threads_for(static_cast<std::size_t>(m)) == 1)
       body(0, 1);
     else
       team.run([&](int tid) { body(tid, team.size()); });

@@ -71,7 +71,7 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
                                                 : std::make_unique<H5mdWriter>(traj.string(), sys, scene, rp);
   H5mdWriter& writer = *writer_ptr;
 
-  Leapfrog<D> lf(sys, make_effects<D>(sys, scene), dt, adaptive);
+  Leapfrog<D> lf(sys, make_effects<D>(sys, scene), dt, adaptive, opt.threads);
   if (from) {
     lf.restore(from->step, from->time, from->dt, from->position, from->velocity, from->effects);
     if (opt.log) opt.log("resumed at step " + std::to_string(from->step) + " (t = " + fmt("%.6g", lf.state().time()) + " s)");

@@ -32,74 +32,18 @@ void spin_until(Done&& done) {
   }
 }
 
-constexpr std::size_t default_min_particles = 8192;
-// PMFRAG_MIN_PARTICLES_PER_THREAD or set_min_particles_per_thread(); 0: not given (the count is measured)
-std::atomic<std::size_t>& min_particles_given() {
-  static std::atomic<std::size_t> m{[] {
-    const char* env = std::getenv("PMFRAG_MIN_PARTICLES_PER_THREAD");
-    const long v = env ? std::atol(env) : 0;
-    return v > 0 ? static_cast<std::size_t>(v) : std::size_t{0};
-  }()};
-  return m;
-}
-thread_local int tuned = 0;
-
-// Team::set_weights or PMFRAG_THREAD_WEIGHTS ("1,3": the second thread takes three times the first one's
-// particles); empty: equal shares. Per calling thread, like its teams.
-std::vector<double> weights_from_env() {
-  std::vector<double> w;
-  const char* env = std::getenv("PMFRAG_THREAD_WEIGHTS");
-  for (const char* p = env; p != nullptr && *p != '\0';) {
-    char* end = nullptr;
-    const double v = std::strtod(p, &end);
-    if (end == p || !(v > 0.0)) return {};  // not a list of positive numbers: equal shares
-    w.push_back(v);
-    p = *end == ',' ? end + 1 : end;
-  }
-  return w;
-}
-thread_local std::vector<double> weights = weights_from_env();
-thread_local unsigned weights_generation = 1;
-
-int max_threads() { return std::max(1, omp_get_max_threads()); }
 }  // namespace
 
-std::size_t Team::min_particles_per_thread() {
-  const std::size_t given = min_particles_given().load(std::memory_order_relaxed);
-  return given > 0 ? given : default_min_particles;
-}
-bool Team::thread_rule_fixed() { return min_particles_given().load(std::memory_order_relaxed) > 0; }
-
-int Team::threads_for(std::size_t particles) {
-  const std::size_t fit = std::max<std::size_t>(1, particles / min_particles_per_thread());
-  return static_cast<int>(std::min<std::size_t>(fit, static_cast<std::size_t>(max_threads())));
-}
-
-int Team::most_threads_for(std::size_t particles) {
-  const std::size_t fit = std::max<std::size_t>(1, particles / static_cast<std::size_t>(particle_grain));
-  return static_cast<int>(std::min<std::size_t>(fit, static_cast<std::size_t>(max_threads())));
-}
-
-void Team::set_tuned_threads(int threads) { tuned = std::max(0, threads); }
-
-Team& Team::get(std::size_t particles) {
-  thread_local std::vector<std::unique_ptr<Team>> teams;  // by size
-  const int want = tuned > 0 ? std::min(tuned, most_threads_for(particles)) : threads_for(particles);
-  const std::size_t k = static_cast<std::size_t>(want);
-  if (teams.size() <= k) teams.resize(k + 1);
-  if (!teams[k]) teams[k] = std::make_unique<Team>(want);
-  return *teams[k];
-}
-
-Team::Team(int threads)
+Team::Team(int threads, std::size_t min_particles_per_thread)
     : size_(std::max(1, threads)), done_(new Counter[static_cast<std::size_t>(size_)]),
-      passed_(new Counter[static_cast<std::size_t>(size_)]) {
+      passed_(new Counter[static_cast<std::size_t>(size_)]),
+      min_particles_(std::max<std::size_t>(1, min_particles_per_thread)) {
   for (int t = 1; t < size_; ++t) workers_.emplace_back([this, t] { work(t); });
 }
 
-void Team::set_weights(std::vector<double> w) {
-  weights = std::move(w);
-  ++weights_generation;
+void Team::set_fixed_weights(std::vector<double> w) {
+  fixed_ = std::move(w);
+  bounds_n_ = -1;
 }
 
 std::vector<long> Team::partition(long n, int threads, const std::vector<double>& weights) {
@@ -127,14 +71,11 @@ std::vector<long> Team::partition(long n, int threads, const std::vector<double>
 }
 
 const std::vector<long>& Team::bounds(long n) {
-  if (n == bounds_n_ && bounds_generation_ == weights_generation) return bounds_;
-  bounds_ = partition(n, size_, weights_fixed(size_) ? weights : balance_);
+  if (n == bounds_n_) return bounds_;
+  bounds_ = partition(n, size_, weights_fixed() ? fixed_ : balance_);
   bounds_n_ = n;
-  bounds_generation_ = weights_generation;
   return bounds_;
 }
-
-bool Team::weights_fixed(int threads) { return weights.size() == static_cast<std::size_t>(threads); }
 
 void Team::set_balance(std::vector<double> w) {
   balance_ = std::move(w);
@@ -191,10 +132,63 @@ void Team::barrier(int tid, const double* data, std::size_t count) {
       spin_until([&] { return passed_[static_cast<std::size_t>(t)].value.load(std::memory_order_acquire) >= pass; });
 }
 
+Threads::Threads(ThreadOptions options) : options_(std::move(options)), max_(options_.resolved_max()) {}
+
+Team& Threads::team(int count) {
+  const std::size_t k = static_cast<std::size_t>(std::clamp(count, 1, max_));
+  if (teams_.size() <= k) teams_.resize(k + 1);
+  if (!teams_[k]) {
+    const std::size_t rule = rule_fixed() ? options_.min_particles_per_thread : Team::default_min_particles_per_thread;
+    teams_[k] = std::make_unique<Team>(static_cast<int>(k), rule);
+    teams_[k]->set_fixed_weights(options_.weights);
+  }
+  return *teams_[k];
+}
+
+int Threads::most_threads_for(std::size_t particles) const {
+  const std::size_t fit = std::max<std::size_t>(1, particles / static_cast<std::size_t>(particle_grain));
+  return static_cast<int>(std::min<std::size_t>(fit, static_cast<std::size_t>(max_)));
+}
+
+void Threads::set_weights(std::vector<double> weights) {
+  options_.weights = std::move(weights);
+  for (auto& t : teams_)
+    if (t) t->set_fixed_weights(options_.weights);
+}
+
 }  // namespace pmfrag::detail
 
 namespace pmfrag {
-void set_min_particles_per_thread(std::size_t n) { detail::min_particles_given().store(n); }
-int step_threads(std::size_t particles) { return detail::Team::threads_for(particles); }
-void set_thread_weights(std::vector<double> weights) { detail::Team::set_weights(std::move(weights)); }
+
+int ThreadOptions::resolved_max() const { return max > 0 ? max : std::max(1, omp_get_max_threads()); }
+
+int ThreadOptions::threads_for(std::size_t particles) const {
+  const std::size_t per = min_particles_per_thread > 0 ? min_particles_per_thread
+                                                      : detail::Team::default_min_particles_per_thread;
+  const std::size_t fit = std::max<std::size_t>(1, particles / per);
+  return static_cast<int>(std::min<std::size_t>(fit, static_cast<std::size_t>(resolved_max())));
+}
+
+ThreadOptions thread_options_from_environment(int max) {
+  ThreadOptions o;
+  o.max = max;
+  if (const char* env = std::getenv("PMFRAG_MIN_PARTICLES_PER_THREAD")) {
+    const long v = std::atol(env);
+    if (v > 0) o.min_particles_per_thread = static_cast<std::size_t>(v);
+  }
+  // "1,3": the second thread takes three times the first one's particles; anything else: equal shares
+  const char* env = std::getenv("PMFRAG_THREAD_WEIGHTS");
+  for (const char* p = env; p != nullptr && *p != '\0';) {
+    char* end = nullptr;
+    const double v = std::strtod(p, &end);
+    if (end == p || !(v > 0.0)) {
+      o.weights.clear();
+      break;
+    }
+    o.weights.push_back(v);
+    p = *end == ',' ? end + 1 : end;
+  }
+  return o;
+}
+
 }  // namespace pmfrag

@@ -6,6 +6,8 @@
 // bitwise the same for any number of threads.
 #pragma once
 
+#include "pmfrag/threads.hpp"
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -20,32 +22,23 @@ namespace pmfrag::detail {
 
 class Team {
  public:
-  /// The calling thread's team for a system of n particles: the count a ThreadTuner chose for this thread
-  /// (`set_tuned_threads`, at most `most_threads_for`), or else `threads_for`. Teams are kept per size, so
-  /// switching between counts starts no threads.
-  static Team& get(std::size_t particles);
-  /// 8192, or PMFRAG_MIN_PARTICLES_PER_THREAD / set_min_particles_per_thread(). Below it a thread's share of a step is a
-  /// few microseconds, and whether a second thread pays depends on the machine at the moment (on the
-  /// project's 2-core VM the (7,14) plate ran 1.5x faster on two threads while both virtual cores were
-  /// free, 0.8x while the host kept one busy: docs/history.md, 2026-12-01), so the static rule keeps
-  /// small systems on one thread and the tuner measures.
-  static std::size_t min_particles_per_thread();
-  /// True if PMFRAG_MIN_PARTICLES_PER_THREAD or set_min_particles_per_thread() gave a value: the thread
-  /// count then follows that rule and is not tuned (tests and benchmarks that need a given count).
-  static bool thread_rule_fixed();
-  /// The static rule: omp_get_max_threads() (`--threads`), but at most one per min_particles_per_thread().
-  static int threads_for(std::size_t particles);
-  /// The most threads worth trying: omp_get_max_threads(), at most one per block of `particle_grain`.
-  static int most_threads_for(std::size_t particles);
-  /// Sets the calling thread's tuned count (0: the static rule again).
-  static void set_tuned_threads(int threads);
-
-  explicit Team(int threads);
+  /// `min_particles_per_thread`: the rule threads_for applies to work items (8,192 by default).
+  explicit Team(int threads, std::size_t min_particles_per_thread = default_min_particles_per_thread);
   ~Team();
+  /// Below this many particles a thread's share of a step is a few microseconds, and whether a second
+  /// thread pays depends on the machine at the moment (on the project's 2-core VM the (7,14) plate ran 1.5x
+  /// faster on two threads while both virtual cores were free, 0.8x while the host kept one busy:
+  /// docs/history.md, 2026-12-01), so the static rule keeps small systems on one thread and the tuner measures.
+  static constexpr std::size_t default_min_particles_per_thread = 8192;
   Team(const Team&) = delete;
   Team& operator=(const Team&) = delete;
 
   int size() const { return size_; }
+  /// How many of the team's threads `items` work items are worth (at least one per
+  /// min_particles_per_thread): work below it is summed on the calling thread without waking the team.
+  int threads_for(std::size_t items) const {
+    return static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(size_), std::max<std::size_t>(1, items / min_particles_)));
+  }
 
   /// The team's partition of n particles: thread t takes [b[t], b[t + 1]), contiguous shares in multiples
   /// of share_grain, equal unless set_weights or set_balance says otherwise. Call outside `run`. Every
@@ -99,12 +92,12 @@ class Team {
     return passed_[static_cast<std::size_t>(t)].data[pass & 1];
   }
 
-  /// Each thread's share of particles, in proportion (calling thread's teams of that size; empty: equal).
-  /// Results do not depend on it (every particle's forces are summed in a fixed order whoever computes
-  /// them): tests use it to check that. Also PMFRAG_THREAD_WEIGHTS, e.g. "1,3".
-  static void set_weights(std::vector<double> weights);
-  /// True if set_weights or PMFRAG_THREAD_WEIGHTS gave weights for teams of `threads`: bounds() follows them.
-  static bool weights_fixed(int threads);
+  /// Each thread's share of particles, in proportion (ignored unless it has one weight per thread; empty:
+  /// none). Results do not depend on it (every particle's forces are summed in a fixed order whoever
+  /// computes them): tests use it to check that (ThreadOptions::weights).
+  void set_fixed_weights(std::vector<double> weights);
+  /// True if fixed weights were given for this team: bounds() follows them and the balancer leaves them.
+  bool weights_fixed() const { return fixed_.size() == static_cast<std::size_t>(size_); }
   /// This team's shares in proportion to `weights` as measured (LoadBalancer), unless weights_fixed.
   void set_balance(std::vector<double> weights);
   /// The partition of n particles into `threads` shares in proportion to `weights` (empty: equal), as
@@ -150,10 +143,35 @@ class Team {
   std::unique_ptr<Counter[]> done_;  ///< per worker: the generation it last finished (written by it)
   std::unique_ptr<Counter[]> passed_;  ///< per thread: barriers it has reached (written by it)
   std::vector<std::thread> workers_;
+  std::size_t min_particles_ = default_min_particles_per_thread;
+  std::vector<double> fixed_;    ///< given weights (set_fixed_weights)
   std::vector<double> balance_;  ///< measured weights (set_balance); empty: equal
   long bounds_n_ = -1;  ///< the particle count bounds_ was made for (-1: stale)
-  unsigned bounds_generation_ = 0;  ///< the weights' generation bounds_ was made with
   std::vector<long> bounds_;
+};
+
+/// The teams of one integrator, one per size used, and its rule for how many threads a system uses. Owned
+/// by the Leapfrog, built from its ThreadOptions.
+class Threads {
+ public:
+  explicit Threads(ThreadOptions options);
+  /// The team of `count` threads (1 ... max()), started on first use and kept: switching between counts
+  /// starts no threads.
+  Team& team(int count);
+  int max() const { return max_; }
+  /// The static rule (ThreadOptions::threads_for).
+  int threads_for(std::size_t particles) const { return options_.threads_for(particles); }
+  /// The most threads worth trying: max(), at most one per block of `particle_grain`.
+  int most_threads_for(std::size_t particles) const;
+  /// True if the options fix the count (min_particles_per_thread given): it is then not measured.
+  bool rule_fixed() const { return options_.min_particles_per_thread > 0; }
+  /// Fixed shares for teams of weights.size() threads (ThreadOptions::weights); empty: measured again.
+  void set_weights(std::vector<double> weights);
+
+ private:
+  ThreadOptions options_;
+  int max_ = 1;
+  std::vector<std::unique_ptr<Team>> teams_;  ///< by size
 };
 
 /// A clock for comparing the threads' busy times: the time-stamp counter where there is one (~20 cycles a
@@ -184,8 +202,7 @@ inline constexpr long share_grain = 64;
 
 /// body(first, last, tid) on every thread of the team for n particles, each with its share (Team::bounds).
 template <class Body>
-inline void for_particles(std::size_t n, Body&& body) {
-  Team& team = Team::get(n);
+inline void for_particles(Team& team, std::size_t n, Body&& body) {
   const std::vector<long>& b = team.bounds(static_cast<long>(n));
   team.run([&](int tid) { body(b[static_cast<std::size_t>(tid)], b[static_cast<std::size_t>(tid) + 1], tid); });
 }

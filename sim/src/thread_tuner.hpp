@@ -27,19 +27,22 @@ namespace pmfrag::detail {
 
 class ThreadTuner {
  public:
-  explicit ThreadTuner(std::size_t particles) {
-    if (Team::thread_rule_fixed()) return;
-    for (int t = 1; t <= Team::most_threads_for(particles); t *= 2) candidates_.push_back(t);
+  ThreadTuner(const Threads& threads, std::size_t particles)
+      : fixed_(threads.threads_for(particles)), count_now_(fixed_) {
+    if (threads.rule_fixed()) return;
+    for (int t = 1; t <= threads.most_threads_for(particles); t *= 2) candidates_.push_back(t);
     if (candidates_.size() < 2) candidates_.clear();
     per_step_.assign(candidates_.size(), 0.0);
   }
-  ~ThreadTuner() { Team::set_tuned_threads(0); }
   ThreadTuner(const ThreadTuner&) = delete;
   ThreadTuner& operator=(const ThreadTuner&) = delete;
 
   bool active() const { return !candidates_.empty(); }
 
-  /// Before a step: sets the calling thread's thread count for it, and starts the clock in a probe window.
+  /// The thread count for the next step or block (set by before_steps; the static rule when not measuring).
+  int count() const { return count_now_; }
+
+  /// Before a step: chooses the thread count for it (count()), and starts the clock in a probe window.
   void before_step() { before_steps(); }
   /// After the step.
   void after_step(int threads_used) { after_steps(threads_used, 1); }
@@ -47,8 +50,7 @@ class ThreadTuner {
   /// Before a block of steps (Leapfrog::advance): as before_step; returns how many steps the block may
   /// take on this count (to the end of the hold, or a few at a time in a probe window, each timed).
   long before_steps() {
-    // (set every time: another integrator on this thread may have set its own count)
-    Team::set_tuned_threads(!active() ? 0 : holding_ > 0 ? best_ : candidates_[probe_]);
+    count_now_ = !active() ? fixed_ : holding_ > 0 ? best_ : candidates_[probe_];
     if (!active()) return std::numeric_limits<long>::max();
     if (holding_ > 0) return holding_;
     if (count_ < warm_steps) return warm_steps - count_;
@@ -98,6 +100,8 @@ class ThreadTuner {
   // steps timed together in a probe window of blocks: short enough that the trimmed mean still leaves out
   // a step with a list rebuild or a frame, long enough that a block's barriers are those of a long run
   static constexpr long timed_block = 8;
+  int fixed_ = 1;      ///< the static rule's count (when not measuring)
+  int count_now_ = 1;  ///< the count chosen for the next step or block
   std::vector<int> candidates_;
   std::vector<double> per_step_;  ///< s: each candidate's (trimmed) mean step in the last probe
   std::vector<double> times_;     ///< s: the steps timed in this window

@@ -5,6 +5,7 @@
 
 #include "pmfrag/aligned.hpp"
 #include "pmfrag/system.hpp"
+#include "pmfrag/threads.hpp"
 
 #include <Eigen/Core>
 
@@ -14,6 +15,10 @@
 #include <vector>
 
 namespace pmfrag {
+
+namespace detail {
+class Team;
+}
 
 template <int D>
 struct State {
@@ -30,6 +35,9 @@ struct State {
   double dt = 0.0;  ///< s: the step that led to r_k (fixed steps: every step)
   double t = 0.0;   ///< s: the time of r_k
   double r0 = 0.2;  ///< cm
+  /// The thread team of this step, set by the integrator before it calls the effects (its count is the
+  /// integrator's ThreadOptions and tuner, not process-wide state); effects split their work on it.
+  detail::Team* team = nullptr;
   double time() const { return t; }
   std::size_t size() const { return x.size(); }
 };

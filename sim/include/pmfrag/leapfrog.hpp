@@ -12,6 +12,7 @@
 namespace pmfrag {
 
 namespace detail {
+class Threads;
 class ThreadTuner;
 class LoadBalancer;
 class Team;
@@ -32,7 +33,9 @@ class Leapfrog {
 
   /// Takes the System's particles at t = 0, runs the effects' setup, and evaluates forces at r_0.
   /// `adaptive`: steps will vary (dt = "adaptive"), so time is summed rather than step x dt.
-  Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>> effects, double dt, bool adaptive = false);
+  /// `threads`: how the steps use threads (the count, whether it is measured, the shares).
+  Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>> effects, double dt, bool adaptive = false,
+           ThreadOptions threads = {});
   Leapfrog(Leapfrog&&) noexcept;
   ~Leapfrog();
 
@@ -68,10 +71,14 @@ class Leapfrog {
   const std::vector<std::unique_ptr<Effect<D>>>& effects() const { return effects_; }
   /// Steps taken on each thread count (index: threads); the count is measured, not fixed (thread_tuner.hpp).
   const std::vector<long>& thread_steps() const;
+  /// Fixed shares of the particles for teams of weights.size() threads from the next step on (tests move
+  /// them between blocks of steps; results do not depend on them); empty: measured shares.
+  void set_thread_weights(std::vector<double> weights);
   /// Steps that ran inside resident blocks (many steps to one pass of the team), not on the plain path.
   long resident_steps_taken() const { return resident_taken_; }
 
  private:
+  detail::Team& use_team();  ///< the team for the next step (the tuner's count), set in s_.team
   void compute_forces();  ///< all forces at r_k, from zero
   void add_forces();      ///< the force stage (stage::force and stage::local_force effects, in order)
   /// Thread tid's share of the move, positions read from xin and written to xout (may be the same).
@@ -106,6 +113,7 @@ class Leapfrog {
   bool assigned_ = false;       ///< the step's first forces set f (stage::assigns_forces): the move keeps it
   long resident_taken_ = 0;  ///< steps completed inside resident blocks
   bool uniform_ = true;  ///< every step so far had the same dt: time = step x dt exactly
+  std::unique_ptr<detail::Threads> threads_;     ///< this integrator's thread teams
   std::unique_ptr<detail::ThreadTuner> tuner_;  ///< how many threads each step runs on
   std::unique_ptr<detail::LoadBalancer> balancer_;  ///< each thread's share of the particles
   AlignedVector<double> busy_;  ///< per thread, a cache line: its busy time in the last resident steps

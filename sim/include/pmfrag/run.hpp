@@ -3,6 +3,7 @@
 #pragma once
 
 #include "pmfrag/scene.hpp"
+#include "pmfrag/threads.hpp"
 
 #include <functional>
 #include <string>
@@ -20,6 +21,7 @@ struct RunOptions {
   std::string out_dir;
   bool allow_unstable = false;  ///< run even if dt exceeds the Eq. 15 limit
   bool force = false;           ///< overwrite an existing trajectory
+  ThreadOptions threads;        ///< how the steps use threads (threads.hpp)
   std::function<void(const std::string&)> log;         ///< one line of information
   std::function<void(const Progress&)> progress;       ///< called every ~0.2 s of wall time
 };
@@ -61,20 +63,6 @@ RunResult run_scene(const Scene& scene, const RunOptions& options);
 /// What a run folder's run.json records, read back (a sweep or study gathering its runs). Fields the file does
 /// not hold keep their defaults; a file that cannot be read or is not JSON throws std::runtime_error naming it.
 RunResult read_run_record(const std::string& path);
-
-/// By default a run measures how many threads its steps run fastest on (1, 2, 4, ... up to
-/// omp_get_max_threads(), each thread with at least 256 particles) and re-measures every so often; the
-/// trajectory is bitwise the same for any count. Setting this (or the environment's
-/// PMFRAG_MIN_PARTICLES_PER_THREAD) fixes the count instead: all threads, but at most one per `particles`
-/// particles. 1 splits any system among all threads (the 1-vs-2-threads tests use it); 0 measures again.
-void set_min_particles_per_thread(std::size_t particles);
-/// Each step thread's share of the particles, in proportion (e.g. {1, 3}); empty: shares that follow the
-/// threads' measured speeds (equal to start with). For this calling thread's runs. The trajectory does not
-/// depend on it (tests check that); PMFRAG_THREAD_WEIGHTS too.
-void set_thread_weights(std::vector<double> weights);
-/// How many threads the step kernels use for a system of this many particles when the count is not
-/// measured: outside a run's steps, or with set_min_particles_per_thread().
-int step_threads(std::size_t particles);
 
 /// Asks a running simulation to stop at the end of its current step, write a checkpoint and return
 /// (RunResult::interrupted). Async-signal-safe: call it from a SIGINT/SIGTERM handler.
