@@ -1,7 +1,7 @@
 #include "cmd_material.hpp"
 
 #include "parse.hpp"
-#include "pmfrag/material.hpp"
+#include "pmfrag/model/material.hpp"
 
 #include <array>
 #include <cstdio>

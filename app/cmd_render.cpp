@@ -4,7 +4,7 @@
 #include "parse.hpp"
 #include "pmfrag/analysis/fragments.hpp"
 #include "pmfrag/analysis/particle_fields.hpp"
-#include "pmfrag/h5md.hpp"
+#include "pmfrag/io/h5md.hpp"
 #include "pmfrag/render/frames.hpp"
 
 #include <algorithm>

@@ -1,8 +1,8 @@
 #include "cmd_run.hpp"
 
 #include "parse.hpp"
-#include "pmfrag/build_info.hpp"
-#include "pmfrag/run.hpp"
+#include "pmfrag/run/build_info.hpp"
+#include "pmfrag/run/run.hpp"
 
 #include <unistd.h>
 

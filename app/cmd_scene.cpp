@@ -1,7 +1,7 @@
 #include "cmd_scene.hpp"
 
-#include "pmfrag/effects.hpp"
-#include "pmfrag/system.hpp"
+#include "pmfrag/step/effects.hpp"
+#include "pmfrag/body/system.hpp"
 
 #include <cmath>
 #include <cstdio>

@@ -7,11 +7,11 @@
 #include "parse.hpp"
 #include "run_files.hpp"
 #include "pmfrag/analysis/fragments.hpp"
-#include "pmfrag/atomic_file.hpp"
-#include "pmfrag/h5md.hpp"
+#include "pmfrag/io/atomic_file.hpp"
+#include "pmfrag/io/h5md.hpp"
 #include "pmfrag/render/charts.hpp"
-#include "pmfrag/run.hpp"
-#include "pmfrag/system.hpp"
+#include "pmfrag/run/run.hpp"
+#include "pmfrag/body/system.hpp"
 
 
 #include <algorithm>

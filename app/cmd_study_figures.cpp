@@ -4,8 +4,8 @@
 // the block grows in x, and in all directions). Each figure is a PNG and a CSV of what it plots. Wiring only.
 #include "cmd_study.hpp"
 
-#include "pmfrag/atomic_file.hpp"
-#include "pmfrag/material.hpp"
+#include "pmfrag/io/atomic_file.hpp"
+#include "pmfrag/model/material.hpp"
 #include "pmfrag/render/charts.hpp"
 
 #include <cmath>

@@ -4,7 +4,7 @@
 // the lateral contraction gives the Poisson ratio. Wiring only: the test is studies::tensile_test.
 #include "cmd_study.hpp"
 
-#include "pmfrag/atomic_file.hpp"
+#include "pmfrag/io/atomic_file.hpp"
 #include "pmfrag/studies/tensile.hpp"
 
 #include <cmath>

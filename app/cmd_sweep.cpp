@@ -8,12 +8,12 @@
 #include "mpi_world.hpp"
 #include "process.hpp"
 #include "run_files.hpp"
-#include "pmfrag/atomic_file.hpp"
-#include "pmfrag/material.hpp"
-#include "pmfrag/run.hpp"
-#include "pmfrag/scene.hpp"
-#include "pmfrag/sweep.hpp"
-#include "pmfrag/system.hpp"
+#include "pmfrag/io/atomic_file.hpp"
+#include "pmfrag/model/material.hpp"
+#include "pmfrag/run/run.hpp"
+#include "pmfrag/body/scene.hpp"
+#include "pmfrag/run/sweep.hpp"
+#include "pmfrag/body/system.hpp"
 
 #include <nlohmann/json.hpp>
 #include <sys/wait.h>

@@ -1,10 +1,10 @@
-// The bond stencil's groups (sim/src/bond_stencil.hpp): in a large body, index offsets whose bonds share no
+// The bond stencil's groups (sim/src/kernels/bond_stencil.hpp): in a large body, index offsets whose bonds share no
 // particle are swept into one buffer, and the assembly reads it back under lane masks. Checked here against
 // the same stencil with one group per offset and against a plain sum over the intact bonds, with bonds broken
 // in every group, on one and two threads.
-#include "bond_stencil.hpp"
-#include "pmfrag/scene.hpp"
-#include "pmfrag/system.hpp"
+#include "kernels/bond_stencil.hpp"
+#include "pmfrag/body/scene.hpp"
+#include "pmfrag/body/system.hpp"
 #include "test_helpers.hpp"
 
 #include <gtest/gtest.h>

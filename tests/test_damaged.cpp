@@ -2,8 +2,8 @@
 // so and process the frames before the damage, identical to those of the intact file.
 #include "pmfrag/analysis/export_vtk.hpp"
 #include "pmfrag/analysis/fragments.hpp"
-#include "pmfrag/h5md.hpp"
-#include "pmfrag/run.hpp"
+#include "pmfrag/io/h5md.hpp"
+#include "pmfrag/run/run.hpp"
 #include "test_helpers.hpp"
 
 #include <gtest/gtest.h>

@@ -1,8 +1,8 @@
 // Dynamics: leapfrog against analytic and brute-force references, conservation, and the paper's plate.
-#include "pmfrag/h5md.hpp"
-#include "pmfrag/material.hpp"
-#include "pmfrag/run.hpp"
-#include "pmfrag/system.hpp"
+#include "pmfrag/io/h5md.hpp"
+#include "pmfrag/model/material.hpp"
+#include "pmfrag/run/run.hpp"
+#include "pmfrag/body/system.hpp"
 #include "test_helpers.hpp"
 
 #include <gtest/gtest.h>

@@ -1,7 +1,7 @@
 // VTU/PVD export: read every file back with VTK's own reader and compare with the trajectory.
 #include "pmfrag/analysis/export_vtk.hpp"
-#include "pmfrag/h5md.hpp"
-#include "pmfrag/run.hpp"
+#include "pmfrag/io/h5md.hpp"
+#include "pmfrag/run/run.hpp"
 #include "test_helpers.hpp"
 
 #include <gtest/gtest.h>

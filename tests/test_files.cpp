@@ -1,6 +1,6 @@
 // Outputs are whole or absent: write_file_atomically under faults (a file-size limit, a missing folder, a body
 // that throws) leaves the previous file as it was, no temporary behind, and says which file and why.
-#include "pmfrag/atomic_file.hpp"
+#include "pmfrag/io/atomic_file.hpp"
 
 #include <gtest/gtest.h>
 #include <sys/resource.h>

@@ -2,8 +2,8 @@
 #include "pmfrag/analysis/fragments.hpp"
 #include "pmfrag/analysis/particle_fields.hpp"
 #include "pmfrag/analysis/union_find.hpp"
-#include "pmfrag/run.hpp"
-#include "pmfrag/system.hpp"
+#include "pmfrag/run/run.hpp"
+#include "pmfrag/body/system.hpp"
 #include "test_helpers.hpp"
 
 #include <gtest/gtest.h>

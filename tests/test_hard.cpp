@@ -1,10 +1,10 @@
 // Hard cases stay numerically stable (label `hard`): the stiff law near the stability limit, impacts with
 // adaptive steps, the logarithmic and the softest laws, pieces flying apart, degenerate bodies.
-#include "pmfrag/h5md.hpp"
-#include "pmfrag/material.hpp"
-#include "pmfrag/neighbors.hpp"
-#include "pmfrag/run.hpp"
-#include "pmfrag/system.hpp"
+#include "pmfrag/io/h5md.hpp"
+#include "pmfrag/model/material.hpp"
+#include "pmfrag/step/neighbors.hpp"
+#include "pmfrag/run/run.hpp"
+#include "pmfrag/body/system.hpp"
 #include "test_helpers.hpp"
 
 #include <gtest/gtest.h>

@@ -1,8 +1,8 @@
 // Shared helpers for engine tests: scenes from the shipped cases, stepping to a time, simple systems.
 #pragma once
 
-#include "pmfrag/leapfrog.hpp"
-#include "pmfrag/scene.hpp"
+#include "pmfrag/step/leapfrog.hpp"
+#include "pmfrag/body/scene.hpp"
 
 #include <unistd.h>
 

@@ -1,10 +1,10 @@
-// The load balancer's decisions (sim/src/load_balancer.hpp), on made-up busy times: the shares follow the
+// The load balancer's decisions (sim/src/threads/load_balancer.hpp), on made-up busy times: the shares follow the
 // measured speeds, stay put when the threads are even (or the gain is too small to pay for a new plan), and
 // are left alone when the user gave weights. Whether the partition changes the trajectory is test_dynamics'
 // concern (it does not).
-#include "load_balancer.hpp"
-#include "pmfrag/run.hpp"
-#include "team.hpp"
+#include "threads/load_balancer.hpp"
+#include "pmfrag/run/run.hpp"
+#include "threads/team.hpp"
 
 #include <gtest/gtest.h>
 

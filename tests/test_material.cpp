@@ -1,6 +1,6 @@
 // Material model against the paper's Table 1, the MD copper numbers and Fig. 8 trends.
-#include "pmfrag/copper_md.hpp"
-#include "pmfrag/material.hpp"
+#include "pmfrag/model/copper_md.hpp"
+#include "pmfrag/model/material.hpp"
 
 #include <gtest/gtest.h>
 

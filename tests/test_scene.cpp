@@ -1,7 +1,7 @@
 // Scenes: the shipped cases read, build and run; errors name file, line and key.
-#include "pmfrag/run.hpp"
-#include "pmfrag/sweep.hpp"
-#include "pmfrag/system.hpp"
+#include "pmfrag/run/run.hpp"
+#include "pmfrag/run/sweep.hpp"
+#include "pmfrag/body/system.hpp"
 #include "test_helpers.hpp"
 
 #include <gtest/gtest.h>

@@ -1,8 +1,8 @@
 #include "pmfrag/analysis/export_vtk.hpp"
 
 #include "pmfrag/analysis/particle_fields.hpp"
-#include "pmfrag/atomic_file.hpp"
-#include "pmfrag/h5md.hpp"
+#include "pmfrag/io/atomic_file.hpp"
+#include "pmfrag/io/h5md.hpp"
 
 #include <vtkCellArray.h>
 #include <vtkCellData.h>

@@ -1,9 +1,9 @@
 #include "pmfrag/analysis/fragments.hpp"
 
 #include "pmfrag/analysis/union_find.hpp"
-#include "pmfrag/atomic_file.hpp"
-#include "pmfrag/h5md.hpp"
-#include "pmfrag/pair_law.hpp"
+#include "pmfrag/io/atomic_file.hpp"
+#include "pmfrag/io/h5md.hpp"
+#include "pmfrag/model/pair_law.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <nlohmann/json.hpp>

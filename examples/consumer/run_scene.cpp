@@ -1,7 +1,7 @@
 // Runs a scene with the installed pmfrag library: what `pmfrag run SCENE --out DIR --set ...` does, without
 // its options. Usage: run_scene SCENE OUT_DIR [KEY=VALUE ...]
-#include <pmfrag/run.hpp>
-#include <pmfrag/scene.hpp>
+#include <pmfrag/run/run.hpp>
+#include <pmfrag/body/scene.hpp>
 
 #include <cstdio>
 #include <exception>

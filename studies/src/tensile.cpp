@@ -1,9 +1,9 @@
 #include "pmfrag/studies/tensile.hpp"
 
-#include "pmfrag/h5md.hpp"
-#include "pmfrag/material.hpp"
-#include "pmfrag/run.hpp"
-#include "pmfrag/scene.hpp"
+#include "pmfrag/io/h5md.hpp"
+#include "pmfrag/model/material.hpp"
+#include "pmfrag/run/run.hpp"
+#include "pmfrag/body/scene.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,7 +1,7 @@
 // libFuzzer target for the scene parser: any text must give a valid Scene or a SceneError that names the
 // file and a line ("fuzz.toml:<line>: ..."). Any other exception, a crash, a hang or a sanitizer report is a
 // finding. Built by tests/fuzz/CMakeLists.txt with clang; run by scripts/fuzz (and CI).
-#include "pmfrag/scene.hpp"
+#include "pmfrag/body/scene.hpp"
 
 #include <cctype>
 #include <cstdint>

@@ -6,7 +6,7 @@
 
 #include "pmfrag/analysis/crack.hpp"
 #include "pmfrag/analysis/power_law.hpp"
-#include "pmfrag/h5md.hpp"
+#include "pmfrag/io/h5md.hpp"
 
 #include <Eigen/Core>
 

@@ -3,7 +3,7 @@
 #pragma once
 
 #include "pmfrag/analysis/fragments.hpp"
-#include "pmfrag/h5md.hpp"
+#include "pmfrag/io/h5md.hpp"
 
 #include <string>
 #include <vector>

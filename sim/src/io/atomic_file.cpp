@@ -1,0 +1,74 @@
+#include "pmfrag/io/atomic_file.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace pmfrag {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// The temporary name: beside the file (a rename within one folder is atomic), unique to this process.
+fs::path temporary_for(const fs::path& path) { return path.string() + ".tmp." + std::to_string(::getpid()); }
+
+[[noreturn]] void fail(const fs::path& path, const fs::path& tmp, int error) {
+  ::unlink(tmp.c_str());
+  throw std::runtime_error(path.string() + ": cannot write: " + std::strerror(error) + " (the previous file is unchanged)");
+}
+
+// Flushes the temporary file to disk and renames it over the file; on failure removes it and throws.
+void commit(const fs::path& path, const fs::path& tmp) {
+  const int fd = ::open(tmp.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) fail(path, tmp, errno);
+  if (::fsync(fd) != 0) {
+    const int error = errno;
+    ::close(fd);
+    fail(path, tmp, error);
+  }
+  ::close(fd);
+  if (::rename(tmp.c_str(), path.c_str()) != 0) fail(path, tmp, errno);
+}
+
+}  // namespace
+
+void write_file_atomically(const fs::path& path, const std::function<void(std::ostream&)>& body) {
+  std::ostringstream text;
+  body(text);  // a body that throws leaves nothing behind: no file was opened yet
+  const std::string bytes = text.str();
+  const fs::path tmp = temporary_for(path);
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) fail(path, tmp, errno);
+  for (std::size_t done = 0; done < bytes.size();) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int error = n < 0 ? errno : EIO;
+      ::close(fd);
+      fail(path, tmp, error);
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  if (::fsync(fd) != 0) {
+    const int error = errno;
+    ::close(fd);
+    fail(path, tmp, error);
+  }
+  if (::close(fd) != 0) fail(path, tmp, errno);
+  if (::rename(tmp.c_str(), path.c_str()) != 0) fail(path, tmp, errno);
+}
+
+void write_file_atomically_by_name(const fs::path& path, const std::function<bool(const fs::path& tmp)>& write) {
+  const fs::path tmp = temporary_for(path);
+  errno = 0;
+  if (!write(tmp)) fail(path, tmp, errno != 0 ? errno : EIO);
+  commit(path, tmp);
+}
+
+}  // namespace pmfrag

@@ -1,0 +1,195 @@
+// Internal pieces of the pair effect: the law evaluators the loops are templated on (so the (p,q) law is
+// inlined; the paper's three laws get compile-time exponents) and a pair table with a per-particle gather.
+#pragma once
+
+#include "pmfrag/kernels/aligned.hpp"
+
+#include "pmfrag/model/pair_law.hpp"
+#include "threads/team.hpp"
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <type_traits>
+#include <vector>
+
+namespace pmfrag::detail {
+
+template <int N, class T>
+inline T pw(T x) {
+  if constexpr (N == 0) {
+    return T(1);
+  } else if constexpr (N == 1) {
+    return x;
+  } else if constexpr (N % 2 == 0) {
+    const T h = pw<N / 2>(x);
+    return h * h;
+  } else {
+    return x * pw<N - 1>(x);
+  }
+}
+
+/// x^n for a runtime n >= 0, in the arithmetic of T.
+template <class T>
+inline T ipow_t(T x, int n) {
+  T r = T(1);
+  for (; n > 0; n >>= 1, x *= x)
+    if (n & 1) r *= x;
+  return r;
+}
+
+/// |F| of the law from 1/r, positive = repulsive, in the arithmetic of T (double, or float for the
+/// precision knob). `with_ids` binds the per-pair law index array of a loop.
+template <int P, int Q>
+struct FixedLaw {
+  static constexpr int p = P, q = Q;
+  double G, H;
+  template <class T = double>
+  T magnitude(std::size_t, T ie) const {
+    return -T(G) * pw<P>(ie) + T(H) * pw<Q>(ie);
+  }
+  FixedLaw with_ids(const int*) const { return *this; }
+};
+template <class Law>
+struct is_fixed_law : std::false_type {};
+template <int P, int Q>
+struct is_fixed_law<FixedLaw<P, Q>> : std::true_type {};
+
+struct OneLaw {
+  PairLaw law;
+  template <class T = double>
+  T magnitude(std::size_t, T ie) const {
+    if constexpr (std::is_same_v<T, double>) return -law.G * ipow(ie, law.p) + law.H * ipow(ie, law.q);
+    return -T(law.G) * ipow_t(ie, law.p) + T(law.H) * ipow_t(ie, law.q);
+  }
+  OneLaw with_ids(const int*) const { return *this; }
+};
+/// The paper's three (p,q) laws; a law's family in LawTable is its index here.
+inline constexpr int paper_pq[3][2] = {{3, 5}, {5, 10}, {7, 14}};
+
+/// What the AVX-512 sweep of several laws (sweep_laws_avx512) needs of them, built once per set of laws:
+/// usable if there are at most eight and each is one of paper_pq; per law G 2^-4(p+1) and H 2^-4(q+1) (the
+/// sweeps' exact scalings, kept normal) and its family.
+struct LawTable {
+  bool usable = false;
+  std::array<double, 8> G_scaled{}, H_scaled{};
+  std::array<long long, 8> family{};
+
+  LawTable() = default;
+  explicit LawTable(const std::vector<PairLaw>& laws) {
+    usable = laws.size() <= 8;
+    for (std::size_t l = 0; l < laws.size() && usable; ++l) {
+      const PairLaw& law = laws[l];
+      family[l] = -1;
+      for (long long f = 0; f < 3; ++f)
+        if (law.p == paper_pq[f][0] && law.q == paper_pq[f][1]) family[l] = f;
+      G_scaled[l] = std::ldexp(law.G, -4 * (law.p + 1));
+      H_scaled[l] = std::ldexp(law.H, -4 * (law.q + 1));
+      usable = family[l] >= 0 && std::isnormal(G_scaled[l]) && std::isnormal(H_scaled[l]);
+    }
+  }
+};
+
+struct ManyLaws {
+  const PairLaw* laws;
+  const int* id;
+  const LawTable* table;  ///< for the vector sweep
+  template <class T = double>
+  T magnitude(std::size_t u, T ie) const {
+    const PairLaw& l = laws[id[u]];
+    if constexpr (std::is_same_v<T, double>) return -l.G * ipow(ie, l.p) + l.H * ipow(ie, l.q);
+    return -T(l.G) * ipow_t(ie, l.p) + T(l.H) * ipow_t(ie, l.q);
+  }
+  ManyLaws with_ids(const int* ids) const { return ManyLaws{laws, ids, table}; }
+};
+
+/// Calls fn(evaluator) with the fastest evaluator that fits: a single law (compile-time exponents for the
+/// paper's (3,5), (5,10), (7,14)) or a per-pair law lookup (`table`: LawTable(laws)).
+template <class Fn>
+auto with_law(const std::vector<PairLaw>& laws, const LawTable& table, bool single, Fn&& fn) {
+  if (single) {
+    const PairLaw& l = laws.front();
+    if (l.p == 7 && l.q == 14) return fn(FixedLaw<7, 14>{l.G, l.H});
+    if (l.p == 5 && l.q == 10) return fn(FixedLaw<5, 10>{l.G, l.H});
+    if (l.p == 3 && l.q == 5) return fn(FixedLaw<3, 5>{l.G, l.H});
+    return fn(OneLaw{l});
+  }
+  return fn(ManyLaws{laws.data(), nullptr, &table});
+}
+
+/// Potential with the r_min clamp continued linearly (phi' = -F, F constant inside r_min).
+inline double law_potential(const PairLaw& law, double r, double r_min) {
+  if (r >= r_min) return law.potential(r);
+  return law.potential(r_min) + law.force(r_min) * (r_min - r);
+}
+
+/// Pairs (i < j) with per-pair law and force, and per-particle incidence for a gather in fixed order.
+template <int D>
+struct PairTable {
+  using V = Eigen::Matrix<double, D, 1>;
+  std::vector<int> i, j, law;
+  std::vector<double, AlignedAllocator<double>> force[D];  ///< components of the force on i (j gets the opposite)
+  std::vector<int> offset, entry;  ///< CSR: entry = pair << 1 | (particle is j)
+  std::vector<int> touched;        ///< particles with at least one pair (the gather visits only these)
+
+  std::size_t size() const { return i.size(); }
+  void clear() { i.clear(), j.clear(), law.clear(); }
+  void add(int a, int b, int l) { i.push_back(a), j.push_back(b), law.push_back(l); }
+  void index(std::size_t n) {
+    for (auto& c : force) c.assign(size(), 0.0);
+    offset.assign(n + 1, 0);
+    for (std::size_t p = 0; p < size(); ++p)
+      ++offset[static_cast<std::size_t>(i[p]) + 1], ++offset[static_cast<std::size_t>(j[p]) + 1];
+    for (std::size_t k = 0; k < n; ++k) offset[k + 1] += offset[k];
+    entry.resize(static_cast<std::size_t>(offset[n]));
+    std::vector<int> fill(offset.begin(), offset.end() - 1);
+    for (std::size_t p = 0; p < size(); ++p) {  // ascending p: a fixed order per particle
+      entry[static_cast<std::size_t>(fill[static_cast<std::size_t>(i[p])]++)] = static_cast<int>(p << 1);
+      entry[static_cast<std::size_t>(fill[static_cast<std::size_t>(j[p])]++)] = static_cast<int>(p << 1 | 1);
+    }
+    touched.clear();
+    for (std::size_t k = 0; k < n; ++k)
+      if (offset[k + 1] > offset[k]) touched.push_back(static_cast<int>(k));
+  }
+  /// The pair forces' components (force, or another thread's copy of them).
+  using Forces = std::array<const double*, D>;
+  Forces forces() const {
+    Forces F;
+    for (int c = 0; c < D; ++c) F[static_cast<std::size_t>(c)] = force[c].data();
+    return F;
+  }
+  /// s = the sum of particle k's pair forces, in its fixed (ascending pair) order.
+  void sum_of(std::size_t k, double (&s)[D]) const { sum_of(k, s, forces()); }
+  void sum_of(std::size_t k, double (&s)[D], const Forces& F) const {
+    for (int c = 0; c < D; ++c) s[c] = 0.0;
+    for (int e = offset[k]; e < offset[k + 1]; ++e) {
+      const int en = entry[static_cast<std::size_t>(e)];
+      const std::size_t p = static_cast<std::size_t>(en >> 1);
+      // j gets -F. A select, not a multiplication by a sign made with an int-to-double conversion: that
+      // conversion writes half a register and stalled this loop on the previous one's result.
+      for (int c = 0; c < D; ++c) {
+        const double Fc = F[static_cast<std::size_t>(c)][p];
+        s[c] += (en & 1) ? -Fc : Fc;
+      }
+    }
+  }
+  /// f_k += sum of its pairs' forces: thread tid of nt does its share of the particles.
+  void gather(double* f, int tid, int nt) const {
+    const auto [first, last] = share(static_cast<long>(touched.size()), tid, nt);
+    gather_touched(f, first, last);
+  }
+  /// The same for the particles touched[first, last).
+  void gather_touched(double* f, long first, long last) const { gather_touched(f, first, last, forces()); }
+  void gather_touched(double* f, long first, long last, const Forces& F) const {
+    for (long t = first; t < last; ++t) {
+      const std::size_t k = static_cast<std::size_t>(touched[static_cast<std::size_t>(t)]);
+      double s[D];
+      sum_of(k, s, F);
+      for (int c = 0; c < D; ++c) f[k * D + static_cast<std::size_t>(c)] += s[c];
+    }
+  }
+};
+
+}  // namespace pmfrag::detail

@@ -1,0 +1,382 @@
+#include "pmfrag/run/run.hpp"
+
+#include "pmfrag/io/atomic_file.hpp"
+#include "pmfrag/run/build_info.hpp"
+#include "pmfrag/io/h5md.hpp"
+#include "pmfrag/step/leapfrog.hpp"
+#include "pmfrag/step/step_levels.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <csignal>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <memory>
+
+namespace pmfrag {
+
+namespace {
+
+volatile std::sig_atomic_t stop_requested = 0;
+
+std::string fmt(const char* f, double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
+}
+
+template <int D>
+RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, const StepChoice& choice,
+                  const Checkpoint* from) {
+  const double dt = choice.dt, limit = choice.limit;  // adaptive: dt is the cap
+  const bool adaptive = choice.adaptive;
+  RunResult res;
+  res.particles = sys.size();
+  res.dt = dt;
+  res.dt_limit = limit;
+  res.adaptive = adaptive;
+  // Fixed steps count steps; adaptive steps count time and land exactly on every output time.
+  const long steps = std::max(1L, std::lround(scene.time.end / dt));
+  const long every = std::max(1L, std::lround(scene.output.every / dt));
+  const long checkpoint_every =
+      scene.output.checkpoint_every > 0 ? std::max(1L, std::lround(scene.output.checkpoint_every / dt)) : 10 * every;
+  const double every_s = scene.output.every, end = scene.time.end, tol = 1e-6 * std::min(every_s, dt);
+  const long checkpoint_frames =
+      scene.output.checkpoint_every > 0 ? std::max(1L, std::lround(scene.output.checkpoint_every / every_s)) : 10;
+  RunParameters rp{dt, limit, end, adaptive ? 0 : every, adaptive};
+
+  namespace fs = std::filesystem;
+  const fs::path dir(opt.out_dir);
+  fs::create_directories(dir);
+  const fs::path traj = dir / "trajectory.h5";
+  const fs::path ckpt = dir / "checkpoint.h5";
+  if (!from) {
+    if (fs::exists(traj) && !opt.force)
+      throw std::runtime_error(traj.string() + " exists; use --force to overwrite it or --resume to continue it");
+    fs::remove(dir / "run.json");
+    fs::remove(ckpt);
+    // The scene as read and its overrides, beside the trajectory, so --resume needs nothing else.
+    write_file_atomically(dir / "scene.toml", [&](std::ostream& s) { s << scene.source; });
+    write_file_atomically(dir / "overrides.txt", [&](std::ostream& ov) {
+      ov << "# source: " << scene.file << "\n";
+      for (const auto& o : scene.overrides) ov << o << "\n";
+    });
+  }
+  std::unique_ptr<H5mdWriter> writer_ptr = from ? std::make_unique<H5mdWriter>(traj.string(), from->frames, from->bond_events)
+                                                : std::make_unique<H5mdWriter>(traj.string(), sys, scene, rp);
+  H5mdWriter& writer = *writer_ptr;
+
+  Leapfrog<D> lf(sys, make_effects<D>(sys, scene), dt, adaptive, opt.threads);
+  if (from) {
+    lf.restore(from->step, from->time, from->dt, from->position, from->velocity, from->effects);
+    if (opt.log) opt.log("resumed at step " + std::to_string(from->step) + " (t = " + fmt("%.6g", lf.state().time()) + " s)");
+  }
+  if (opt.log) {
+    std::string names;
+    for (const auto& e : lf.effects()) names += (names.empty() ? "" : ", ") + e->name();
+    opt.log("effects: " + (names.empty() ? std::string("none") : names));
+    if (adaptive)
+      opt.log(std::to_string(sys.size()) + " particles, " + std::to_string(sys.bonds.size()) +
+              " bonds, adaptive steps up to " + fmt("%.4g", dt) + " s, a frame every " + fmt("%.4g", every_s) + " s");
+    else
+      opt.log(std::to_string(sys.size()) + " particles, " + std::to_string(sys.bonds.size()) + " bonds, " +
+              std::to_string(steps) + " steps, a frame every " + std::to_string(every) + " steps");
+  }
+
+  std::vector<Eigen::Matrix<double, D, 1>> v;
+  std::vector<double> xbuf, vbuf;
+  std::vector<BondEvent> events;
+  // The bond events recorded since the last frame or checkpoint go to the trajectory before either.
+  auto record_events = [&] {
+    events.clear();
+    for (const auto& e : lf.effects()) take_bond_events<D>(*e, events);
+    writer.append_bond_events(events);
+  };
+  auto write = [&] {
+    record_events();
+    const auto& s = lf.state();
+    lf.whole_step_velocity(v);
+    xbuf.resize(s.size() * D);
+    vbuf.resize(s.size() * D);
+    for (std::size_t i = 0; i < s.size(); ++i)
+      for (int d = 0; d < D; ++d) xbuf[i * D + d] = s.x[i][d], vbuf[i * D + d] = v[i][d];
+    writer.write_frame(s.step, s.time(), xbuf, vbuf, lf.observe());
+  };
+
+  StepLevels levels(dt, every_s);
+  if (from) levels.restore(from->level, from->calm);
+  using clock = std::chrono::steady_clock;
+  const auto t0 = clock::now();
+  auto last_report = t0;
+  auto checkpoint = [&] {
+    record_events();
+    writer.flush();  // the rows the checkpoint counts are on disk before it
+    const auto& s = lf.state();
+    Checkpoint c;
+    c.bond_events = writer.bond_event_rows();
+    c.step = s.step;
+    c.time = s.t;
+    c.dt = s.dt;
+    c.level = levels.level(), c.calm = levels.calm();
+    c.frames = writer.frames();
+    for (std::size_t i = 0; i < s.size(); ++i)
+      for (int d = 0; d < D; ++d) c.position.push_back(s.x[i][d]), c.velocity.push_back(s.v[i][d]);
+    c.effects = lf.effect_state();
+    write_checkpoint(ckpt.string(), c);
+  };
+  auto done = [&] { return adaptive ? !(lf.state().t < end - tol) : lf.state().step >= steps; };
+  double dt_min_taken = dt;
+  try {
+    if (!from) write();
+    while (!done()) {
+      bool frame_due = false, take_checkpoint = false;
+      if (adaptive) {
+        // The stability limit at the closest approach present, as a power-of-two level of the cap (see
+        // step_levels.hpp), cut short only to land on an output time.
+        const double allowed = scene.time.safety * choice.lattice_factor * lf.step_limit();
+        double h = 0.0;
+        try {
+          h = levels.next(allowed);
+        } catch (const std::runtime_error&) {
+          // The state is whole (this step is not taken): keep it in a checkpoint, as an interrupted run does.
+          lf.canonicalize();
+          checkpoint();
+          throw GuardError("adaptive step collapsed: the limit at the closest approach is " + fmt("%.3g", allowed) +
+                               " s, below 1e-6 of the cap " + fmt("%.3g", dt) + " s, at t = " + fmt("%.6g", lf.state().t) +
+                               " s (particles pressed to the stiffest part of the law: a lower speed, or a larger "
+                               "pair.r_min); a checkpoint is kept at this step",
+                           lf.state().step, lf.state().t, -1);
+        }
+        const double to_out = std::min(static_cast<double>(writer.frames()) * every_s, end) - lf.state().t;
+        if (h >= to_out - tol) h = to_out;
+        dt_min_taken = std::min(dt_min_taken, h);
+        lf.step(h);
+        frame_due = !(lf.state().t < static_cast<double>(writer.frames()) * every_s - tol) || done();
+        take_checkpoint = frame_due && (done() || writer.frames() % checkpoint_frames == 0);
+      } else {
+        // Steps to the next frame, checkpoint or progress line in one call: quiet steps then run many to a
+        // pass of the thread team.
+        const long k0 = lf.state().step;
+        lf.advance(std::min({every - k0 % every, checkpoint_every - k0 % checkpoint_every, 256 - (k0 & 255), steps - k0}));
+        const long k = lf.state().step;
+        frame_due = k % every == 0 || k == steps;
+        take_checkpoint = k % checkpoint_every == 0 || k == steps;  // and at the last step
+      }
+      const long k = lf.state().step;
+      // At a checkpoint step the lists are rebuilt first, in an uninterrupted run as in a resumed one, so
+      // both continue bitwise alike.
+      if (take_checkpoint) lf.canonicalize();
+      if (frame_due) write();
+      if (take_checkpoint) checkpoint();
+      if (stop_requested && !done()) {
+        // Interrupted: keep the frames written and checkpoint this step so --resume continues from here.
+        checkpoint();
+        res.interrupted = true;
+        res.message = "interrupted at step " + std::to_string(k) + " (t = " + fmt("%.6g", lf.state().time()) +
+                      " s); continue with: pmfrag run --resume " + opt.out_dir;
+        break;
+      }
+      if (opt.progress && (k & 255) == 0) {
+        const auto now = clock::now();
+        if (std::chrono::duration<double>(now - last_report).count() > 0.2) {
+          last_report = now;
+          Progress p;
+          p.wall_s = std::chrono::duration<double>(now - t0).count();
+          p.step = k, p.time = lf.state().time(), p.end = end;
+          p.steps = adaptive ? std::max(k, std::lround(k * end / std::max(p.time, tol))) : steps;
+          p.steps_per_s = k / p.wall_s;
+          p.eta_s = (p.steps - k) / p.steps_per_s;
+          opt.progress(p);
+        }
+      }
+    }
+    res.completed = !res.interrupted;
+  } catch (const GuardError& e) {
+    res.completed = false;
+    res.message = e.what();
+  }
+  // What reads the trajectory says it is partial until a resume completes it.
+  if (!res.completed) writer.mark_incomplete(res.interrupted ? res.message : "stopped: " + res.message);
+  res.wall_s = std::chrono::duration<double>(clock::now() - t0).count();
+  res.steps = lf.state().step;
+  res.dt_min = dt_min_taken;
+  res.thread_steps = lf.thread_steps();
+  res.frames = writer.frames();
+  record_events();  // a run stopped between frames: its last events too (after the last frame's rows)
+  writer.close();
+  for (const auto& e : lf.effects()) {
+    const auto bv = bond_view<D>(*e);
+    if (!bv.alive) continue;
+    res.pair_model = bv.cutoff_model ? "cutoff" : "bonded";
+    if (bv.first_break_step >= 0) res.first_break_time = bv.first_break_time;
+    res.bonds_broken = bv.broke;
+    res.bonds_re_formed = bv.re_formed;
+    res.bonds_beyond_now = 0;
+    for (const auto a : *bv.alive) res.bonds_beyond_now += !a;
+    res.list_builds = bv.list_builds, res.skin = bv.skin;
+  }
+
+  // run.json: what ran and how fast (for sweeps and benchmarks; read back by read_run_record).
+  {
+    nlohmann::ordered_json by_threads = nlohmann::ordered_json::object();
+    for (std::size_t t = 1; t < res.thread_steps.size(); ++t)
+      if (res.thread_steps[t] > 0) by_threads[std::to_string(t)] = res.thread_steps[t];
+    const nlohmann::ordered_json record = {
+        {"completed", res.completed},
+        {"interrupted", res.interrupted},
+        {"message", res.message},
+        {"particles", res.particles},
+        {"steps", res.steps},
+        {"frames", res.frames},
+        {"dt_s", res.dt},
+        {"dt_adaptive", res.adaptive},
+        {"dt_min_s", res.dt_min},
+        {"dt_limit_s", res.dt_limit},
+        {"wall_s", res.wall_s},
+        {"particle_steps_per_s", res.particle_steps_per_s()},
+        {"threads", res.threads()},
+        {"kernels", kernel_path()},
+        {"processor", processor_name()},
+        {"steps_by_threads", by_threads},
+        {"pair_model", res.pair_model},
+        {"first_break_time_s", res.first_break_time},
+        {"bond_events",
+         {{"broken", res.bonds_broken},
+          {"re_formed", res.bonds_re_formed},
+          {"beyond_cutoff_at_end", res.bonds_beyond_now},
+          {"rows", writer.bond_event_rows()}}},
+        {"neighbour_list_builds", res.list_builds},
+        {"verlet_skin_r0", res.skin / sys.r0}};
+    write_file_atomically(dir / "run.json", [&](std::ostream& js) {
+      js << record.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << "\n";
+    });
+  }
+  return res;
+}
+
+}  // namespace
+
+void request_stop() noexcept { stop_requested = 1; }
+
+RunResult read_run_record(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open the run record");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(path + ": not a run record (" + e.what() + ")");
+  }
+  if (!j.is_object()) throw std::runtime_error(path + ": not a run record (not a JSON object)");
+  // A number written as null (not finite) or absent keeps the default.
+  const auto number = [&](const nlohmann::json& at, const char* key, double fallback) {
+    return at.contains(key) && at[key].is_number() ? at[key].get<double>() : fallback;
+  };
+  const auto flag = [&](const char* key) { return j.contains(key) && j[key].is_boolean() && j[key].get<bool>(); };
+  RunResult r;
+  r.completed = flag("completed");
+  r.interrupted = flag("interrupted");
+  r.adaptive = flag("dt_adaptive");
+  if (j.contains("message") && j["message"].is_string()) r.message = j["message"].get<std::string>();
+  if (j.contains("pair_model") && j["pair_model"].is_string()) r.pair_model = j["pair_model"].get<std::string>();
+  r.particles = static_cast<std::size_t>(number(j, "particles", 0.0));
+  r.steps = static_cast<long>(number(j, "steps", 0.0));
+  r.frames = static_cast<long>(number(j, "frames", 0.0));
+  r.dt = number(j, "dt_s", 0.0);
+  r.dt_min = number(j, "dt_min_s", 0.0);
+  r.dt_limit = number(j, "dt_limit_s", 0.0);
+  r.wall_s = number(j, "wall_s", 0.0);
+  r.first_break_time = number(j, "first_break_time_s", -1.0);
+  r.list_builds = static_cast<long>(number(j, "neighbour_list_builds", 0.0));
+  if (j.contains("bond_events") && j["bond_events"].is_object()) {
+    const nlohmann::json& e = j["bond_events"];
+    r.bonds_broken = static_cast<long>(number(e, "broken", 0.0));
+    r.bonds_re_formed = static_cast<long>(number(e, "re_formed", 0.0));
+    r.bonds_beyond_now = static_cast<long>(number(e, "beyond_cutoff_at_end", 0.0));
+  }
+  if (j.contains("steps_by_threads") && j["steps_by_threads"].is_object())
+    for (const auto& [threads, steps] : j["steps_by_threads"].items()) {
+      char* end = nullptr;
+      const std::size_t t = std::strtoul(threads.c_str(), &end, 10);
+      if (*end || t == 0 || t > 4096 || !steps.is_number()) continue;
+      if (r.thread_steps.size() <= t) r.thread_steps.resize(t + 1, 0);
+      r.thread_steps[t] = steps.get<long>();
+    }
+  return r;
+}
+
+RunResult run_scene(const Scene& scene, const RunOptions& opt) {
+  const System sys = build_system(scene);
+  const StepChoice choice = choose_step(scene, sys);
+  const double limit = choice.limit, dt = choice.dt;
+  if (opt.log) {
+    const std::string where =
+        sys.r_min > 0 ? " (at r_min = " + fmt("%.3g", sys.r_min) + " cm)" : std::string(" (stretch, at r0)");
+    const std::string limits = "stability limit " + fmt("%.4g", limit) + " s = Eq. 15 " + fmt("%.4g", choice.pair_limit) +
+                               " s" + where + " x lattice factor " + fmt("%.3f", choice.lattice_factor);
+    if (choice.adaptive)
+      opt.log("dt adaptive: " + fmt("%.3g", scene.time.safety) + " x the limit at the closest approach, at most " +
+              fmt("%.4g", dt) + " s (" + limits + ")");
+    else
+      opt.log("dt = " + fmt("%.4g", dt) + " s, " + limits + ", dt/limit = " + fmt("%.3f", dt / limit));
+  }
+  if (!choice.adaptive && dt > limit && !opt.allow_unstable)
+    throw UnstableStepError(scene.file + ": time.dt = " + fmt("%.4g", dt) + " s exceeds the stability limit " +
+                            fmt("%.4g", limit) + " s (Eq. 15 x lattice factor " + fmt("%.3f", choice.lattice_factor) +
+                            "; ratio " + fmt("%.3f", dt / limit) +
+                            "); lower it, use dt = \"auto\", or pass --allow-unstable");
+  if (scene.time.end < dt) throw SceneError(scene.file + ": time.end is shorter than one step");
+  if (scene.dim == 2) return run_dim<2>(scene, sys, opt, choice, nullptr);
+  return run_dim<3>(scene, sys, opt, choice, nullptr);
+}
+
+RunResult resume_run(const RunOptions& opt) {
+  namespace fs = std::filesystem;
+  const fs::path dir(opt.out_dir);
+  const fs::path traj = dir / "trajectory.h5", ckpt = dir / "checkpoint.h5", info = dir / "run.json";
+  if (!fs::exists(traj)) throw std::runtime_error(traj.string() + " does not exist: nothing to resume");
+  if (fs::exists(info)) {
+    std::ifstream in(info);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (text.find("\"completed\": true") != std::string::npos) {
+      RunResult r;
+      r.completed = true;
+      r.message = "already finished: " + traj.string() + " is complete";
+      return r;
+    }
+  }
+  if (!fs::exists(dir / "scene.toml") || !fs::exists(dir / "overrides.txt"))
+    throw std::runtime_error(dir.string() + " has no scene.toml/overrides.txt: not a pmfrag run folder");
+  std::string file;
+  std::vector<std::string> overrides;
+  {
+    std::ifstream ov(dir / "overrides.txt");
+    for (std::string line; std::getline(ov, line);) {
+      if (line.rfind("# source: ", 0) == 0)
+        file = line.substr(10);
+      else if (!line.empty())
+        overrides.push_back(line);
+    }
+  }
+  std::ifstream in(dir / "scene.toml");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const Scene scene = parse_scene(text, file, overrides);
+  RunOptions o = opt;
+  if (!fs::exists(ckpt)) {
+    if (o.log) o.log("no checkpoint in " + dir.string() + ": starting over");
+    o.force = true;
+    return run_scene(scene, o);
+  }
+  const Checkpoint c = read_checkpoint(ckpt.string());
+  const System sys = build_system(scene);
+  const StepChoice choice = choose_step(scene, sys);
+  if (scene.dim == 2) return run_dim<2>(scene, sys, o, choice, &c);
+  return run_dim<3>(scene, sys, o, choice, &c);
+}
+
+}  // namespace pmfrag
