@@ -324,7 +324,7 @@ TEST(Dynamics, VerletSkinFitsTheIntactLatticeAndWidensOnceItBreaks) {
   EXPECT_GT(bond_view<2>(pair).skin, 0.5 * gap);
   EXPECT_LT(bond_view<2>(pair).skin, gap);
   // Quiet: the pulled rows move far, but the plate stretches nearly affinely, and the list is kept while its
-  // pairs' separations could not have closed the skin (affine_residual in pair.cpp; measured on the raw
+  // pairs' separations could not have closed the skin (affine_residual in pair_base.hpp; measured on the raw
   // displacements instead, as before commit 31d5e4e, it was rebuilt 22 times).
   for (long k = 0; k < 20000; ++k) lf.step();
   const long quiet_builds = bond_view<2>(pair).list_builds;
@@ -521,7 +521,7 @@ std::vector<BondEvent> expect_record_is_every_change(const Scene& sc, long steps
 }  // namespace
 
 TEST(BondRecord, CutoffModelRecordsEveryCrossingOfDAtItsStep) {
-  // The cutoff model tests only bonds near D each step (pair.cpp, record_crossings); the (3,5) cutoff plate
+  // The cutoff model tests only bonds near D each step (pair_cutoff.cpp, record_crossings); the (3,5) cutoff plate
   // collapses near its slit tips from ~3.6e-3 s, and pulled 100x faster the (7,14) plate tears: pairs leave D
   // and come back within it, and every change must be recorded at the step the lengths show it.
   const Scene collapse = read_scene(test::case_path("slit_plate_3_5.toml"), {"pair.model=\"cutoff\""});

@@ -1,6 +1,7 @@
 // The effects besides the pair law. Each is attached only when the scene declares it.
 #include "pmfrag/step/effects.hpp"
 
+#include "step/pair_base.hpp"
 #include "threads/team.hpp"
 
 #include <algorithm>
@@ -8,9 +9,6 @@
 #include <functional>
 
 namespace pmfrag {
-
-template <int D>
-std::unique_ptr<Effect<D>> make_pair_effect(const System& sys, const PairSpec& spec);
 
 namespace {
 
@@ -217,7 +215,9 @@ class GreenspanAlpha final : public Effect<D> {
 template <int D>
 std::vector<std::unique_ptr<Effect<D>>> make_effects(const System& sys, const Scene& scene) {
   std::vector<std::unique_ptr<Effect<D>>> out;
-  if (scene.pair) out.push_back(make_pair_effect<D>(sys, *scene.pair));
+  if (scene.pair)
+    out.push_back(scene.pair->model == PairModel::bonded ? detail::make_bonded_pair<D>(sys, *scene.pair)
+                                                         : detail::make_cutoff_pair<D>(sys, *scene.pair));
   if (scene.greenspan_alpha) {
     if (!scene.pair) throw SceneError(scene.file + ": greenspan_alpha scales the pair force, but no [pair] is declared");
     out.push_back(std::make_unique<GreenspanAlpha<D>>(sys));

@@ -76,6 +76,31 @@ inline constexpr unsigned assigns_forces = 1u << 7;
 inline constexpr unsigned local_force = 1u << 8;
 }  // namespace stage
 
+/// A change in the state of an original bond (a row of System::bonds), recorded by the pair effect at the
+/// step it happens and written to the trajectory (/connectivity/broken_bonds).
+/// Bonded model: the bond broke (longer than D) and is gone for good. Cutoff model: the pair left D (it no
+/// longer interacts), or came back within D (re_formed: it interacts again).
+struct BondEvent {
+  long step = 0;       ///< the first step whose positions show the change
+  double time = 0.0;   ///< s, of that step
+  long bond = 0;       ///< row of /connectivity/bonds
+  bool re_formed = false;
+  bool operator==(const BondEvent&) const = default;
+};
+
+/// What a pair effect reports of the original bonds and its neighbour list (for run.json and tests).
+template <int D>
+struct BondView {
+  /// per original bond: intact (bonded model) or within D (cutoff model)
+  const std::vector<std::uint8_t>* alive = nullptr;
+  bool cutoff_model = false;
+  long first_break_step = -1;      ///< the first bond broken / pair leaving D
+  double first_break_time = -1.0;  ///< s
+  long broke = 0;                  ///< bonds broken (cutoff model: times a pair left D)
+  long re_formed = 0;              ///< cutoff model: times a pair came back within D
+  long list_builds = 0;  ///< neighbour-list builds since the run (or its resume) started; 0 if it keeps no list
+  double skin = 0.0;     ///< cm: the Verlet skin now (it adapts; see step/pair_base.hpp)
+};
 template <int D>
 class Effect {
  public:
@@ -131,42 +156,27 @@ class Effect {
   /// checkpoint, and read back in the same order.
   virtual void save(std::vector<double>&) const {}
   virtual void load(const double*&) {}
+
+  /// Reports: what the effect knows of the original bonds (the pair effects; others report nothing), and
+  /// the bond events recorded since the last call, moved to the end of `out` in step order.
+  virtual BondView<D> bond_view() const { return {}; }
+  virtual void take_bond_events(std::vector<BondEvent>&) {}
 };
+
+/// The pair effect's report, if `e` is one (else an empty view).
+template <int D>
+BondView<D> bond_view(const Effect<D>& e) {
+  return e.bond_view();
+}
+/// Moves the bond events `e` recorded since the last call to the end of `out`, in step order.
+template <int D>
+void take_bond_events(Effect<D>& e, std::vector<BondEvent>& out) {
+  e.take_bond_events(out);
+}
 
 /// The effects a scene declares, in the order the integrator calls them: pair, greenspan_alpha, gravity,
 /// damping, kinematic. (The impactor sets initial velocities when the System is built.)
 template <int D>
 std::vector<std::unique_ptr<Effect<D>>> make_effects(const System& sys, const Scene& scene);
-
-/// A change in the state of an original bond (a row of System::bonds), recorded by the pair effect at the
-/// step it happens and written to the trajectory (/connectivity/broken_bonds).
-/// Bonded model: the bond broke (longer than D) and is gone for good. Cutoff model: the pair left D (it no
-/// longer interacts), or came back within D (re_formed: it interacts again).
-struct BondEvent {
-  long step = 0;       ///< the first step whose positions show the change
-  double time = 0.0;   ///< s, of that step
-  long bond = 0;       ///< row of /connectivity/bonds
-  bool re_formed = false;
-  bool operator==(const BondEvent&) const = default;
-};
-
-/// Internals exposed for tests and run.json: bond and neighbour-list state of the pair effect, if any.
-template <int D>
-struct BondView {
-  /// per original bond: intact (bonded model) or within D (cutoff model)
-  const std::vector<std::uint8_t>* alive = nullptr;
-  bool cutoff_model = false;
-  long first_break_step = -1;      ///< the first bond broken / pair leaving D
-  double first_break_time = -1.0;  ///< s
-  long broke = 0;                  ///< bonds broken (cutoff model: times a pair left D)
-  long re_formed = 0;              ///< cutoff model: times a pair came back within D
-  long list_builds = 0;  ///< neighbour-list builds since the run (or its resume) started; 0 if it keeps no list
-  double skin = 0.0;     ///< cm: the Verlet skin now (it adapts; see pair.cpp)
-};
-template <int D>
-BondView<D> bond_view(const Effect<D>& e);
-/// Moves the bond events the pair effect recorded since the last call to the end of `out`, in step order.
-template <int D>
-void take_bond_events(Effect<D>& e, std::vector<BondEvent>& out);
 
 }  // namespace pmfrag
