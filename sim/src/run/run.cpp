@@ -30,6 +30,182 @@ std::string fmt(const char* f, double v) {
   return b;
 }
 
+// When frames, checkpoints and the end fall. Fixed steps count steps; adaptive steps count time and land
+// exactly on every output time.
+struct Schedule {
+  long steps = 0, every = 0, checkpoint_every = 0;  ///< fixed steps: steps to the end, between frames, checkpoints
+  long checkpoint_frames = 0;                       ///< adaptive steps: frames between checkpoints
+  double every_s = 0.0, end = 0.0, tol = 0.0;       ///< s
+};
+Schedule schedule_of(const Scene& scene, double dt) {
+  Schedule c;
+  c.steps = std::max(1L, std::lround(scene.time.end / dt));
+  c.every = std::max(1L, std::lround(scene.output.every / dt));
+  c.checkpoint_every =
+      scene.output.checkpoint_every > 0 ? std::max(1L, std::lround(scene.output.checkpoint_every / dt)) : 10 * c.every;
+  c.every_s = scene.output.every, c.end = scene.time.end, c.tol = 1e-6 * std::min(c.every_s, dt);
+  c.checkpoint_frames =
+      scene.output.checkpoint_every > 0 ? std::max(1L, std::lround(scene.output.checkpoint_every / c.every_s)) : 10;
+  return c;
+}
+
+// A new run's folder: refuses to overwrite a trajectory without --force, clears the old run's record and
+// checkpoint, and keeps the scene as read and its overrides beside the trajectory (--resume needs nothing else).
+void start_run_folder(const std::filesystem::path& dir, const Scene& scene, bool force) {
+  namespace fs = std::filesystem;
+  const fs::path traj = dir / "trajectory.h5";
+  if (fs::exists(traj) && !force)
+    throw std::runtime_error(traj.string() + " exists; use --force to overwrite it or --resume to continue it");
+  fs::remove(dir / "run.json");
+  fs::remove(dir / "checkpoint.h5");
+  write_file_atomically(dir / "scene.toml", [&](std::ostream& s) { s << scene.source; });
+  write_file_atomically(dir / "overrides.txt", [&](std::ostream& ov) {
+    ov << "# source: " << scene.file << "\n";
+    for (const auto& o : scene.overrides) ov << o << "\n";
+  });
+}
+
+// What a run writes as it goes: frames, the bond events before each, and checkpoints.
+template <int D>
+class RunOutput {
+ public:
+  RunOutput(H5mdWriter& writer, Leapfrog<D>& lf, std::string checkpoint_path)
+      : writer_(writer), lf_(lf), checkpoint_path_(std::move(checkpoint_path)) {}
+
+  // The bond events recorded since the last frame or checkpoint go to the trajectory before either.
+  void record_events() {
+    events_.clear();
+    for (const auto& e : lf_.effects()) take_bond_events<D>(*e, events_);
+    writer_.append_bond_events(events_);
+  }
+  void frame() {
+    record_events();
+    const auto& s = lf_.state();
+    lf_.whole_step_velocity(v_);
+    x_flat_.resize(s.size() * D);
+    v_flat_.resize(s.size() * D);
+    for (std::size_t i = 0; i < s.size(); ++i)
+      for (int d = 0; d < D; ++d) x_flat_[i * D + d] = s.x[i][d], v_flat_[i * D + d] = v_[i][d];
+    writer_.write_frame(s.step, s.time(), x_flat_, v_flat_, lf_.observe());
+  }
+  void checkpoint(const StepLevels& levels) {
+    record_events();
+    writer_.flush();  // the rows the checkpoint counts are on disk before it
+    const auto& s = lf_.state();
+    Checkpoint c;
+    c.bond_events = writer_.bond_event_rows();
+    c.step = s.step;
+    c.time = s.t;
+    c.dt = s.dt;
+    c.level = levels.level(), c.calm = levels.calm();
+    c.frames = writer_.frames();
+    for (std::size_t i = 0; i < s.size(); ++i)
+      for (int d = 0; d < D; ++d) c.position.push_back(s.x[i][d]), c.velocity.push_back(s.v[i][d]);
+    c.effects = lf_.effect_state();
+    write_checkpoint(checkpoint_path_, c);
+  }
+
+ private:
+  H5mdWriter& writer_;
+  Leapfrog<D>& lf_;
+  std::string checkpoint_path_;
+  std::vector<Eigen::Matrix<double, D, 1>> v_;
+  std::vector<double> x_flat_, v_flat_;
+  std::vector<BondEvent> events_;
+};
+
+template <int D>
+void log_start(const RunOptions& opt, const System& sys, const Leapfrog<D>& lf, const Schedule& at, double dt,
+               bool adaptive) {
+  if (!opt.log) return;
+  std::string names;
+  for (const auto& e : lf.effects()) names += (names.empty() ? "" : ", ") + e->name();
+  opt.log("effects: " + (names.empty() ? std::string("none") : names));
+  if (adaptive)
+    opt.log(std::to_string(sys.size()) + " particles, " + std::to_string(sys.bonds.size()) +
+            " bonds, adaptive steps up to " + fmt("%.4g", dt) + " s, a frame every " + fmt("%.4g", at.every_s) + " s");
+  else
+    opt.log(std::to_string(sys.size()) + " particles, " + std::to_string(sys.bonds.size()) + " bonds, " +
+            std::to_string(at.steps) + " steps, a frame every " + std::to_string(at.every) + " steps");
+}
+
+// The pair effect's report on the bonds, into the result.
+template <int D>
+void take_bond_results(const Leapfrog<D>& lf, RunResult& res) {
+  for (const auto& e : lf.effects()) {
+    const auto bv = bond_view<D>(*e);
+    if (!bv.alive) continue;
+    res.pair_model = bv.cutoff_model ? "cutoff" : "bonded";
+    if (bv.first_break_step >= 0) res.first_break_time = bv.first_break_time;
+    res.bonds_broken = bv.broke;
+    res.bonds_re_formed = bv.re_formed;
+    res.bonds_beyond_now = 0;
+    for (const auto a : *bv.alive) res.bonds_beyond_now += !a;
+    res.list_builds = bv.list_builds, res.skin = bv.skin;
+  }
+}
+
+// run.json: what ran and how fast (for sweeps and benchmarks; read back by read_run_record).
+void write_run_record(const std::filesystem::path& dir, const RunResult& res, long event_rows, double r0) {
+  nlohmann::ordered_json by_threads = nlohmann::ordered_json::object();
+  for (std::size_t t = 1; t < res.thread_steps.size(); ++t)
+    if (res.thread_steps[t] > 0) by_threads[std::to_string(t)] = res.thread_steps[t];
+  const nlohmann::ordered_json record = {
+      {"completed", res.completed},
+      {"interrupted", res.interrupted},
+      {"message", res.message},
+      {"particles", res.particles},
+      {"steps", res.steps},
+      {"frames", res.frames},
+      {"dt_s", res.dt},
+      {"dt_adaptive", res.adaptive},
+      {"dt_min_s", res.dt_min},
+      {"dt_limit_s", res.dt_limit},
+      {"wall_s", res.wall_s},
+      {"particle_steps_per_s", res.particle_steps_per_s()},
+      {"threads", res.threads()},
+      {"kernels", kernel_path()},
+      {"processor", processor_name()},
+      {"steps_by_threads", by_threads},
+      {"pair_model", res.pair_model},
+      {"first_break_time_s", res.first_break_time},
+      {"bond_events",
+       {{"broken", res.bonds_broken},
+        {"re_formed", res.bonds_re_formed},
+        {"beyond_cutoff_at_end", res.bonds_beyond_now},
+        {"rows", event_rows}}},
+      {"neighbour_list_builds", res.list_builds},
+      {"verlet_skin_r0", res.skin / r0}};
+  write_file_atomically(dir / "run.json", [&](std::ostream& js) {
+    js << record.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << "\n";
+  });
+}
+
+// A progress line every ~0.2 s of wall time (checked every 256 steps).
+class ProgressReport {
+ public:
+  using clock = std::chrono::steady_clock;
+  explicit ProgressReport(const RunOptions& opt) : opt_(opt), t0_(clock::now()), last_(t0_) {}
+  double wall_s() const { return std::chrono::duration<double>(clock::now() - t0_).count(); }
+  void maybe(long k, double time, const Schedule& at, bool adaptive) {
+    if (!opt_.progress || (k & 255) != 0) return;
+    const auto now = clock::now();
+    if (std::chrono::duration<double>(now - last_).count() <= 0.2) return;
+    last_ = now;
+    Progress p;
+    p.wall_s = std::chrono::duration<double>(now - t0_).count();
+    p.step = k, p.time = time, p.end = at.end;
+    p.steps = adaptive ? std::max(k, std::lround(k * at.end / std::max(p.time, at.tol))) : at.steps;
+    p.steps_per_s = k / p.wall_s;
+    p.eta_s = (p.steps - k) / p.steps_per_s;
+    opt_.progress(p);
+  }
+
+ private:
+  const RunOptions& opt_;
+  clock::time_point t0_, last_;
+};
+
 template <int D>
 RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, const StepChoice& choice,
                   const Checkpoint* from) {
@@ -40,35 +216,15 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
   res.dt = dt;
   res.dt_limit = limit;
   res.adaptive = adaptive;
-  // Fixed steps count steps; adaptive steps count time and land exactly on every output time.
-  const long steps = std::max(1L, std::lround(scene.time.end / dt));
-  const long every = std::max(1L, std::lround(scene.output.every / dt));
-  const long checkpoint_every =
-      scene.output.checkpoint_every > 0 ? std::max(1L, std::lround(scene.output.checkpoint_every / dt)) : 10 * every;
-  const double every_s = scene.output.every, end = scene.time.end, tol = 1e-6 * std::min(every_s, dt);
-  const long checkpoint_frames =
-      scene.output.checkpoint_every > 0 ? std::max(1L, std::lround(scene.output.checkpoint_every / every_s)) : 10;
-  RunParameters rp{dt, limit, end, adaptive ? 0 : every, adaptive};
+  const Schedule at = schedule_of(scene, dt);
+  const RunParameters rp{dt, limit, at.end, adaptive ? 0 : at.every, adaptive};
 
-  namespace fs = std::filesystem;
-  const fs::path dir(opt.out_dir);
-  fs::create_directories(dir);
-  const fs::path traj = dir / "trajectory.h5";
-  const fs::path ckpt = dir / "checkpoint.h5";
-  if (!from) {
-    if (fs::exists(traj) && !opt.force)
-      throw std::runtime_error(traj.string() + " exists; use --force to overwrite it or --resume to continue it");
-    fs::remove(dir / "run.json");
-    fs::remove(ckpt);
-    // The scene as read and its overrides, beside the trajectory, so --resume needs nothing else.
-    write_file_atomically(dir / "scene.toml", [&](std::ostream& s) { s << scene.source; });
-    write_file_atomically(dir / "overrides.txt", [&](std::ostream& ov) {
-      ov << "# source: " << scene.file << "\n";
-      for (const auto& o : scene.overrides) ov << o << "\n";
-    });
-  }
-  std::unique_ptr<H5mdWriter> writer_ptr = from ? std::make_unique<H5mdWriter>(traj.string(), from->frames, from->bond_events)
-                                                : std::make_unique<H5mdWriter>(traj.string(), sys, scene, rp);
+  const std::filesystem::path dir(opt.out_dir);
+  std::filesystem::create_directories(dir);
+  if (!from) start_run_folder(dir, scene, opt.force);
+  const std::string traj = (dir / "trajectory.h5").string();
+  std::unique_ptr<H5mdWriter> writer_ptr = from ? std::make_unique<H5mdWriter>(traj, from->frames, from->bond_events)
+                                                : std::make_unique<H5mdWriter>(traj, sys, scene, rp);
   H5mdWriter& writer = *writer_ptr;
 
   Leapfrog<D> lf(sys, make_effects<D>(sys, scene), dt, adaptive, opt.threads);
@@ -76,63 +232,16 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
     lf.restore(from->step, from->time, from->dt, from->position, from->velocity, from->effects);
     if (opt.log) opt.log("resumed at step " + std::to_string(from->step) + " (t = " + fmt("%.6g", lf.state().time()) + " s)");
   }
-  if (opt.log) {
-    std::string names;
-    for (const auto& e : lf.effects()) names += (names.empty() ? "" : ", ") + e->name();
-    opt.log("effects: " + (names.empty() ? std::string("none") : names));
-    if (adaptive)
-      opt.log(std::to_string(sys.size()) + " particles, " + std::to_string(sys.bonds.size()) +
-              " bonds, adaptive steps up to " + fmt("%.4g", dt) + " s, a frame every " + fmt("%.4g", every_s) + " s");
-    else
-      opt.log(std::to_string(sys.size()) + " particles, " + std::to_string(sys.bonds.size()) + " bonds, " +
-              std::to_string(steps) + " steps, a frame every " + std::to_string(every) + " steps");
-  }
+  log_start(opt, sys, lf, at, dt, adaptive);
 
-  std::vector<Eigen::Matrix<double, D, 1>> v;
-  std::vector<double> xbuf, vbuf;
-  std::vector<BondEvent> events;
-  // The bond events recorded since the last frame or checkpoint go to the trajectory before either.
-  auto record_events = [&] {
-    events.clear();
-    for (const auto& e : lf.effects()) take_bond_events<D>(*e, events);
-    writer.append_bond_events(events);
-  };
-  auto write = [&] {
-    record_events();
-    const auto& s = lf.state();
-    lf.whole_step_velocity(v);
-    xbuf.resize(s.size() * D);
-    vbuf.resize(s.size() * D);
-    for (std::size_t i = 0; i < s.size(); ++i)
-      for (int d = 0; d < D; ++d) xbuf[i * D + d] = s.x[i][d], vbuf[i * D + d] = v[i][d];
-    writer.write_frame(s.step, s.time(), xbuf, vbuf, lf.observe());
-  };
-
-  StepLevels levels(dt, every_s);
+  RunOutput<D> out(writer, lf, (dir / "checkpoint.h5").string());
+  StepLevels levels(dt, at.every_s);
   if (from) levels.restore(from->level, from->calm);
-  using clock = std::chrono::steady_clock;
-  const auto t0 = clock::now();
-  auto last_report = t0;
-  auto checkpoint = [&] {
-    record_events();
-    writer.flush();  // the rows the checkpoint counts are on disk before it
-    const auto& s = lf.state();
-    Checkpoint c;
-    c.bond_events = writer.bond_event_rows();
-    c.step = s.step;
-    c.time = s.t;
-    c.dt = s.dt;
-    c.level = levels.level(), c.calm = levels.calm();
-    c.frames = writer.frames();
-    for (std::size_t i = 0; i < s.size(); ++i)
-      for (int d = 0; d < D; ++d) c.position.push_back(s.x[i][d]), c.velocity.push_back(s.v[i][d]);
-    c.effects = lf.effect_state();
-    write_checkpoint(ckpt.string(), c);
-  };
-  auto done = [&] { return adaptive ? !(lf.state().t < end - tol) : lf.state().step >= steps; };
+  ProgressReport progress(opt);
+  auto done = [&] { return adaptive ? !(lf.state().t < at.end - at.tol) : lf.state().step >= at.steps; };
   double dt_min_taken = dt;
   try {
-    if (!from) write();
+    if (!from) out.frame();
     while (!done()) {
       bool frame_due = false, take_checkpoint = false;
       if (adaptive) {
@@ -145,55 +254,44 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
         } catch (const std::runtime_error&) {
           // The state is whole (this step is not taken): keep it in a checkpoint, as an interrupted run does.
           lf.canonicalize();
-          checkpoint();
+          out.checkpoint(levels);
           throw GuardError("adaptive step collapsed: the limit at the closest approach is " + fmt("%.3g", allowed) +
                                " s, below 1e-6 of the cap " + fmt("%.3g", dt) + " s, at t = " + fmt("%.6g", lf.state().t) +
                                " s (particles pressed to the stiffest part of the law: a lower speed, or a larger "
                                "pair.r_min); a checkpoint is kept at this step",
                            lf.state().step, lf.state().t, -1);
         }
-        const double to_out = std::min(static_cast<double>(writer.frames()) * every_s, end) - lf.state().t;
-        if (h >= to_out - tol) h = to_out;
+        const double to_out = std::min(static_cast<double>(writer.frames()) * at.every_s, at.end) - lf.state().t;
+        if (h >= to_out - at.tol) h = to_out;
         dt_min_taken = std::min(dt_min_taken, h);
         lf.step(h);
-        frame_due = !(lf.state().t < static_cast<double>(writer.frames()) * every_s - tol) || done();
-        take_checkpoint = frame_due && (done() || writer.frames() % checkpoint_frames == 0);
+        frame_due = !(lf.state().t < static_cast<double>(writer.frames()) * at.every_s - at.tol) || done();
+        take_checkpoint = frame_due && (done() || writer.frames() % at.checkpoint_frames == 0);
       } else {
         // Steps to the next frame, checkpoint or progress line in one call: quiet steps then run many to a
         // pass of the thread team.
         const long k0 = lf.state().step;
-        lf.advance(std::min({every - k0 % every, checkpoint_every - k0 % checkpoint_every, 256 - (k0 & 255), steps - k0}));
+        lf.advance(std::min({at.every - k0 % at.every, at.checkpoint_every - k0 % at.checkpoint_every,
+                             256 - (k0 & 255), at.steps - k0}));
         const long k = lf.state().step;
-        frame_due = k % every == 0 || k == steps;
-        take_checkpoint = k % checkpoint_every == 0 || k == steps;  // and at the last step
+        frame_due = k % at.every == 0 || k == at.steps;
+        take_checkpoint = k % at.checkpoint_every == 0 || k == at.steps;  // and at the last step
       }
       const long k = lf.state().step;
       // At a checkpoint step the lists are rebuilt first, in an uninterrupted run as in a resumed one, so
       // both continue bitwise alike.
       if (take_checkpoint) lf.canonicalize();
-      if (frame_due) write();
-      if (take_checkpoint) checkpoint();
+      if (frame_due) out.frame();
+      if (take_checkpoint) out.checkpoint(levels);
       if (stop_requested && !done()) {
         // Interrupted: keep the frames written and checkpoint this step so --resume continues from here.
-        checkpoint();
+        out.checkpoint(levels);
         res.interrupted = true;
         res.message = "interrupted at step " + std::to_string(k) + " (t = " + fmt("%.6g", lf.state().time()) +
                       " s); continue with: pmfrag run --resume " + opt.out_dir;
         break;
       }
-      if (opt.progress && (k & 255) == 0) {
-        const auto now = clock::now();
-        if (std::chrono::duration<double>(now - last_report).count() > 0.2) {
-          last_report = now;
-          Progress p;
-          p.wall_s = std::chrono::duration<double>(now - t0).count();
-          p.step = k, p.time = lf.state().time(), p.end = end;
-          p.steps = adaptive ? std::max(k, std::lround(k * end / std::max(p.time, tol))) : steps;
-          p.steps_per_s = k / p.wall_s;
-          p.eta_s = (p.steps - k) / p.steps_per_s;
-          opt.progress(p);
-        }
-      }
+      progress.maybe(k, lf.state().time(), at, adaptive);
     }
     res.completed = !res.interrupted;
   } catch (const GuardError& e) {
@@ -202,60 +300,15 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
   }
   // What reads the trajectory says it is partial until a resume completes it.
   if (!res.completed) writer.mark_incomplete(res.interrupted ? res.message : "stopped: " + res.message);
-  res.wall_s = std::chrono::duration<double>(clock::now() - t0).count();
+  res.wall_s = progress.wall_s();
   res.steps = lf.state().step;
   res.dt_min = dt_min_taken;
   res.thread_steps = lf.thread_steps();
   res.frames = writer.frames();
-  record_events();  // a run stopped between frames: its last events too (after the last frame's rows)
+  out.record_events();  // a run stopped between frames: its last events too (after the last frame's rows)
   writer.close();
-  for (const auto& e : lf.effects()) {
-    const auto bv = bond_view<D>(*e);
-    if (!bv.alive) continue;
-    res.pair_model = bv.cutoff_model ? "cutoff" : "bonded";
-    if (bv.first_break_step >= 0) res.first_break_time = bv.first_break_time;
-    res.bonds_broken = bv.broke;
-    res.bonds_re_formed = bv.re_formed;
-    res.bonds_beyond_now = 0;
-    for (const auto a : *bv.alive) res.bonds_beyond_now += !a;
-    res.list_builds = bv.list_builds, res.skin = bv.skin;
-  }
-
-  // run.json: what ran and how fast (for sweeps and benchmarks; read back by read_run_record).
-  {
-    nlohmann::ordered_json by_threads = nlohmann::ordered_json::object();
-    for (std::size_t t = 1; t < res.thread_steps.size(); ++t)
-      if (res.thread_steps[t] > 0) by_threads[std::to_string(t)] = res.thread_steps[t];
-    const nlohmann::ordered_json record = {
-        {"completed", res.completed},
-        {"interrupted", res.interrupted},
-        {"message", res.message},
-        {"particles", res.particles},
-        {"steps", res.steps},
-        {"frames", res.frames},
-        {"dt_s", res.dt},
-        {"dt_adaptive", res.adaptive},
-        {"dt_min_s", res.dt_min},
-        {"dt_limit_s", res.dt_limit},
-        {"wall_s", res.wall_s},
-        {"particle_steps_per_s", res.particle_steps_per_s()},
-        {"threads", res.threads()},
-        {"kernels", kernel_path()},
-        {"processor", processor_name()},
-        {"steps_by_threads", by_threads},
-        {"pair_model", res.pair_model},
-        {"first_break_time_s", res.first_break_time},
-        {"bond_events",
-         {{"broken", res.bonds_broken},
-          {"re_formed", res.bonds_re_formed},
-          {"beyond_cutoff_at_end", res.bonds_beyond_now},
-          {"rows", writer.bond_event_rows()}}},
-        {"neighbour_list_builds", res.list_builds},
-        {"verlet_skin_r0", res.skin / sys.r0}};
-    write_file_atomically(dir / "run.json", [&](std::ostream& js) {
-      js << record.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << "\n";
-    });
-  }
+  take_bond_results(lf, res);
+  write_run_record(dir, res, writer.bond_event_rows(), sys.r0);
   return res;
 }
 
