@@ -19,6 +19,7 @@
 
 #include "pmfrag/kernels/aligned.hpp"
 #include "kernels/bond_sweep_avx512.hpp"
+#include "pmfrag/run/build_info.hpp"
 #include "kernels/pair_kernels.hpp"
 #include "threads/team.hpp"
 
@@ -252,9 +253,13 @@ class BondStencil {
   static std::size_t whole_ring(std::size_t n, long reach) {
     return ring_of(std::max(n, static_cast<std::size_t>(particle_grain)) + static_cast<std::size_t>(reach));
   }
-  /// Whether a thread's rings of `groups` groups may hold every particle once and still fit in L2.
+  /// Whether a thread's rings of `groups` groups may hold every particle once and still leave most of the
+  /// core's L2 (read at run time) to the particles' positions and forces: a quarter of it (256 KiB on the
+  /// 1 MiB L2 of the machine this was first measured on; 256 KiB where the size cannot be read).
   static bool fits_whole(std::size_t n, std::size_t groups, long reach) {
-    return whole_ring(n, reach) * groups * D * sizeof(double) <= (256u << 10);
+    const std::size_t l2 = l2_cache_bytes();
+    const std::size_t budget = l2 > 0 ? l2 / 4 : (256u << 10);
+    return whole_ring(n, reach) * groups * D * sizeof(double) <= budget;
   }
 
   struct Run {

@@ -1,5 +1,8 @@
 #include "pmfrag/run/build_info.hpp"
 
+#include <unistd.h>
+
+#include <cctype>
 #include <fstream>
 
 #include "kernels/bond_sweep_avx512.hpp"  // defines PMFRAG_HAVE_AVX512_SWEEP where the AVX-512 sweeps are compiled
@@ -24,6 +27,30 @@ std::string processor_name() {
     return start == std::string::npos ? "unknown processor" : line.substr(start);
   }
   return "unknown processor";
+}
+
+namespace {
+std::size_t read_l2_cache_bytes() {
+#ifdef _SC_LEVEL2_CACHE_SIZE
+  const long v = sysconf(_SC_LEVEL2_CACHE_SIZE);
+  if (v > 0) return static_cast<std::size_t>(v);
+#endif
+  std::ifstream in("/sys/devices/system/cpu/cpu0/cache/index2/size");  // e.g. "512K"
+  std::size_t n = 0;
+  char unit = 0;
+  if (!(in >> n)) return 0;
+  in >> unit;
+  switch (std::toupper(static_cast<unsigned char>(unit))) {
+    case 'K': return n << 10;
+    case 'M': return n << 20;
+    default: return n;
+  }
+}
+}  // namespace
+
+std::size_t l2_cache_bytes() {
+  static const std::size_t bytes = read_l2_cache_bytes();
+  return bytes;
 }
 
 }  // namespace pmfrag

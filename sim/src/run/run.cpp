@@ -166,6 +166,7 @@ void write_run_record(const std::filesystem::path& dir, const RunResult& res, lo
       {"threads", res.threads()},
       {"kernels", kernel_path()},
       {"processor", processor_name()},
+      {"l2_cache_bytes", l2_cache_bytes()},
       {"steps_by_threads", by_threads},
       {"pair_model", res.pair_model},
       {"first_break_time_s", res.first_break_time},
