@@ -49,7 +49,7 @@ pmfrag_once() {  # pmfrag_once SCENE MODEL THREADS STEPS DT -> particle-steps/s 
   echo >> "$work/used_threads"
 }
 
-echo "machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) cores; $(date -u +%F)"
+echo "machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) cores, L2 $(($(getconf LEVEL2_CACHE_SIZE 2>/dev/null || echo 0) / 1024)) KiB per core; $(date -u +%F)"
 echo "(one-core runs of both codes pinned to core $(($(nproc) - 1)); 'steps on' = pmfrag's steps per thread count)"
 echo "(rates: medians of $reps runs; ratio: the median of the $reps pairs' ratios, each pair's listed)"
 printf "%-28s %-7s %14s %14s %8s  %s\n" scene threads pmfrag LAMMPS ratio "(steps run; pairs' ratios; pmfrag steps on threads:count)"
