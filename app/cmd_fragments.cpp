@@ -1,6 +1,7 @@
 #include "cmd_fragments.hpp"
 
 #include "parse.hpp"
+#include "pmfrag/io/folder_lock.hpp"
 #include "pmfrag/analysis/fragments.hpp"
 
 #include <cstdio>
@@ -26,6 +27,7 @@ void run(const FragmentsCli& o) {
   }
   const std::string traj = (std::filesystem::path(o.dir) / "trajectory.h5").string();
   if (!std::filesystem::exists(traj)) throw UsageError(o.dir + ": no trajectory.h5 (run `pmfrag run SCENE --out DIR` first)");
+  const FolderLock lock(o.dir);  // one writer per run folder: a second is refused at once
   const auto rep = analysis::analyse_fragments(traj, c);
   analysis::write_fragment_report(rep, o.dir);
   const auto& end = rep.timeline.back();

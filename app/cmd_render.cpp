@@ -2,6 +2,7 @@
 
 #include "movie.hpp"
 #include "parse.hpp"
+#include "pmfrag/io/folder_lock.hpp"
 #include "pmfrag/analysis/fragments.hpp"
 #include "pmfrag/analysis/particle_fields.hpp"
 #include "pmfrag/io/h5md.hpp"
@@ -92,6 +93,7 @@ void run(const RenderCli& o) {
   namespace fs = std::filesystem;
   const fs::path dir(o.dir);
   if (!fs::exists(dir / "trajectory.h5")) throw UsageError(o.dir + ": no trajectory.h5 (run `pmfrag run` first)");
+  const FolderLock lock(o.dir);  // one writer per run folder: a second is refused at once
   std::vector<double> panel_at;
   if (!o.panel.empty()) {
     std::stringstream ss(o.panel);

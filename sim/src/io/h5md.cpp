@@ -8,11 +8,22 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <cerrno>
 #include <stdexcept>
 
 namespace pmfrag {
 
 namespace {
+
+// HDF5 installs an atexit hook that closes what is still open. After a write failed (a full disk) it
+// crashed there closing the broken file (HDF5 1.10: a segmentation fault after the error was printed), so
+// the library is told not to: every file is closed explicitly, and the system releases what remains.
+// Its error stack is not printed either: our messages name the file and the cause (one line each).
+[[maybe_unused]] const bool hdf5_quiet = [] {
+  H5dont_atexit();
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  return true;
+}();
 
 void check(herr_t status, const char* what) {
   if (status < 0) throw std::runtime_error(std::string("HDF5: ") + what + " failed");
@@ -396,7 +407,14 @@ void H5mdWriter::append_bond_events(const std::vector<BondEvent>& events) {
   events_ += static_cast<long>(n);
 }
 
-void H5mdWriter::flush() { check(H5Fflush(impl_->file, H5F_SCOPE_GLOBAL), "flush"); }
+void H5mdWriter::flush() {
+  errno = 0;  // HDF5 does not pass on why a write failed; the system's errno of its last call says
+  if (H5Fflush(impl_->file, H5F_SCOPE_GLOBAL) < 0) {
+    const int err = errno != 0 ? errno : EIO;
+    const std::string& name = impl_->part.empty() ? impl_->path : impl_->part;
+    throw std::runtime_error(name + ": cannot write: " + std::strerror(err) + " (the frames and checkpoint written before are kept)");
+  }
+}
 
 void H5mdWriter::mark_incomplete(const std::string& why) {
   hid_t par = checked(H5Gopen2(impl_->file, "/parameters", H5P_DEFAULT), "parameters");

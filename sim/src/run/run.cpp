@@ -1,6 +1,7 @@
 #include "pmfrag/run/run.hpp"
 
 #include "pmfrag/io/atomic_file.hpp"
+#include "pmfrag/io/folder_lock.hpp"
 #include "pmfrag/run/build_info.hpp"
 #include "pmfrag/io/h5md.hpp"
 #include "pmfrag/step/leapfrog.hpp"
@@ -17,6 +18,7 @@
 #include <fstream>
 #include <iterator>
 #include <memory>
+#include <optional>
 
 namespace pmfrag {
 
@@ -364,7 +366,9 @@ RunResult read_run_record(const std::string& path) {
   return r;
 }
 
-RunResult run_scene(const Scene& scene, const RunOptions& opt) {
+namespace {
+// A new run, its step checked; `take_lock`: false if the caller already holds the folder's lock.
+RunResult start_run(const Scene& scene, const RunOptions& opt, bool take_lock) {
   const System sys = build_system(scene);
   const StepChoice choice = choose_step(scene, sys);
   const double limit = choice.limit, dt = choice.dt;
@@ -385,24 +389,26 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
                             "; ratio " + fmt("%.3f", dt / limit) +
                             "); lower it, use dt = \"auto\", or pass --allow-unstable");
   if (scene.time.end < dt) throw SceneError(scene.file + ": time.end is shorter than one step");
+  std::optional<FolderLock> lock;
+  if (take_lock) lock.emplace(opt.out_dir);  // one writer per run folder (folder_lock.hpp)
   if (scene.dim == 2) return run_dim<2>(scene, sys, opt, choice, nullptr);
   return run_dim<3>(scene, sys, opt, choice, nullptr);
 }
+}  // namespace
+
+RunResult run_scene(const Scene& scene, const RunOptions& opt) { return start_run(scene, opt, true); }
 
 RunResult resume_run(const RunOptions& opt) {
   namespace fs = std::filesystem;
   const fs::path dir(opt.out_dir);
   const fs::path traj = dir / "trajectory.h5", ckpt = dir / "checkpoint.h5", info = dir / "run.json";
   if (!fs::exists(traj)) throw std::runtime_error(traj.string() + " does not exist: nothing to resume");
-  if (fs::exists(info)) {
-    std::ifstream in(info);
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (text.find("\"completed\": true") != std::string::npos) {
-      RunResult r;
-      r.completed = true;
-      r.message = "already finished: " + traj.string() + " is complete";
-      return r;
-    }
+  const FolderLock lock(dir);  // one writer per run folder (folder_lock.hpp)
+  if (fs::exists(info) && read_run_record(info.string()).completed) {
+    RunResult r;
+    r.completed = true;
+    r.message = "already finished: " + traj.string() + " is complete";
+    return r;
   }
   if (!fs::exists(dir / "scene.toml") || !fs::exists(dir / "overrides.txt"))
     throw std::runtime_error(dir.string() + " has no scene.toml/overrides.txt: not a pmfrag run folder");
@@ -424,7 +430,7 @@ RunResult resume_run(const RunOptions& opt) {
   if (!fs::exists(ckpt)) {
     if (o.log) o.log("no checkpoint in " + dir.string() + ": starting over");
     o.force = true;
-    return run_scene(scene, o);
+    return start_run(scene, o, false);
   }
   const Checkpoint c = read_checkpoint(ckpt.string());
   const System sys = build_system(scene);
