@@ -12,7 +12,7 @@ new=$2
 reps=${REPS:-5}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-median() { sort -g | awk '{a[NR] = $1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
+source bench/lib.sh
 rate() {  # rate BIN THREADS SCENE [--set ...] -> particle-steps/s of one run
   local bin=$1 threads=$2 scene=$3
   shift 3
@@ -20,7 +20,7 @@ rate() {  # rate BIN THREADS SCENE [--set ...] -> particle-steps/s of one run
     > /dev/null
   sed -n 's/.*"particle_steps_per_s": *\([0-9.e+-]*\).*/\1/p' "$work/run/run.json"
 }
-echo "processor: $(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores; $(date -u +%F); $reps pairs a row"
+echo "processor: $(processor), $(nproc) cores; $(date -u +%F); $reps pairs a row"
 echo "old: $old"
 echo "new: $new"
 printf '%-44s %7s %11s %11s %7s %s\n' scene threads old new new/old "pairs' range"

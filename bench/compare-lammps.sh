@@ -26,7 +26,7 @@ mpi=(mpirun --allow-run-as-root --oversubscribe -np 2)
 # is the median of the pairs' ratios: in a minute when one core ran slow, a pair's two runs both were, while
 # the medians of the two codes' rates could come from different minutes.
 reps=${REPS:-5}
-median() { sort -g | awk '{a[NR] = $1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
+source bench/lib.sh
 # This VM's two virtual cores do not run at one speed: for minutes at a time one runs both codes ~1.45x
 # slower than the other (pmfrag 1.8e8 against 2.7e8, LAMMPS 1.65e7 against 2.4e7 on the bonded plate,
 # 2026-12-01, docs/history.md). So one-core runs of both codes are pinned to the same core, and the runs alternate

@@ -17,7 +17,7 @@ reps=${REPS:-5}
 end=${END:-2e-3}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-median() { sort -g | awk '{a[NR] = $1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
+source bench/lib.sh
 rate() {  # rate BIN THREADS [--set ...] -> particle-steps/s of one run
   local bin=$1 threads=$2
   shift 2
@@ -28,7 +28,7 @@ rate() {  # rate BIN THREADS [--set ...] -> particle-steps/s of one run
   sed -n 's/.*"particle_steps_per_s": *\([0-9.e+-]*\).*/\1/p' "$work/run/run.json"
 }
 every=(--set 'gravity.g=[0,-980]' --set damping.gamma=1.0 --set greenspan_alpha.enabled=true)
-echo "processor: $(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores; $(date -u +%F)"
+echo "processor: $(processor), $(nproc) cores; $(date -u +%F)"
 echo "scene: cases/slit_plate_7_14.toml (bonded, 2,698 particles), 0 to $end s; $reps alternated pairs"
 printf '%-40s %7s %14s %14s %7s\n' binary threads "pair+kin" "+3 effects" ratio
 for threads in 1 2; do

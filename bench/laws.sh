@@ -17,13 +17,13 @@ laws=("$@")
 reps=${REPS:-3}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-median() { sort -g | awk '{a[NR] = $1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
+source bench/lib.sh
 rate() {  # rate P Q -> particle-steps/s
   "$bin" run cases/slit_plate_7_14.toml --out "$work/run" --force -q --threads 1 --set "phase.0.p=$1" \
     --set "phase.0.q=$2" --set 'time.dt="auto"' --set time.end=1e-3 --set output.every=1 > /dev/null
   sed -n 's/.*"particle_steps_per_s": *\([0-9.e+-]*\).*/\1/p' "$work/run/run.json"
 }
-echo "processor: $(lscpu | sed -n 's/^Model name: *//p' | head -1); kernels: $("$bin" run --help > /dev/null 2>&1; \
+echo "processor: $(processor); kernels: $( \
   "$bin" run cases/slit_plate_7_14.toml --out "$work/k" -q --set time.end=1e-6 > /dev/null 2>&1; \
   sed -n 's/.*"kernels": *"\([a-z0-9-]*\)".*/\1/p' "$work/k/run.json"); $(date -u +%F); $reps pairs a law"
 printf '%-8s %12s %12s %8s\n' "(p,q)" "law" "(7,14)" ratio

@@ -32,15 +32,6 @@ inline T pw(T x) {
   }
 }
 
-/// x^n for a runtime n >= 0, in the arithmetic of T.
-template <class T>
-inline T ipow_t(T x, int n) {
-  T r = T(1);
-  for (; n > 0; n >>= 1, x *= x)
-    if (n & 1) r *= x;
-  return r;
-}
-
 /// |F| of the law from 1/r, positive = repulsive, in the arithmetic of T (double, or float for the
 /// precision knob). `with_ids` binds the per-pair law index array of a loop.
 template <int P, int Q>

@@ -82,11 +82,9 @@ Leapfrog<D>::Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>>
       throw std::logic_error(e->name() + ": its fused forces would come before those assigning the forces");
     }
     if (st & stage::fused_force) fused_force_.push_back(e.get());
-    if (st & (stage::force | stage::local_force)) {
-      force_.push_back(e.get());
-      force_local_.push_back((st & stage::local_force) != 0);
-    }
-    if (st & (stage::resident | stage::local_force)) thread_forces_.push_back({e.get(), (st & stage::local_force) != 0});
+    const bool local = (st & stage::local_force) != 0;
+    if (st & (stage::force | stage::local_force)) force_.push_back({e.get(), local});
+    if (st & (stage::resident | stage::local_force)) thread_forces_.push_back({e.get(), local});
     if (st & stage::after_move) after_move_.push_back(e.get());
     if (st & stage::observe) observe_.push_back(e.get());
     if (st & stage::step_limit) step_limit_.push_back(e.get());
@@ -153,18 +151,18 @@ void Leapfrog<D>::compute_forces() {
 template <int D>
 void Leapfrog<D>::add_forces() {
   for (std::size_t k = 0; k < force_.size();) {
-    if (!force_local_[k]) {
-      force_[k++]->add_forces(s_);
+    if (!force_[k].local) {
+      force_[k++].effect->add_forces(s_);
       continue;
     }
     std::size_t end = k;
-    while (end < force_.size() && force_local_[end]) ++end;
+    while (end < force_.size() && force_[end].local) ++end;
     detail::Team& team = *s_.team;
     const std::vector<long>& b = team.bounds(static_cast<long>(s_.size()));
     const double* x = s_.x.front().data();
     team.run([&](int tid) {
       for (std::size_t j = k; j < end; ++j)
-        force_[j]->local_forces(s_, x, b[static_cast<std::size_t>(tid)], b[static_cast<std::size_t>(tid) + 1]);
+        force_[j].effect->local_forces(s_, x, b[static_cast<std::size_t>(tid)], b[static_cast<std::size_t>(tid) + 1]);
     });
     k = end;
   }
@@ -369,7 +367,7 @@ long Leapfrog<D>::resident_steps(detail::Team& team, long steps) {
       long mine = 0;
       for (auto* e : resident_) e->resident_moved(max_step, tid);
       const long first = share[static_cast<std::size_t>(tid)], last = share[static_cast<std::size_t>(tid) + 1];
-      for (const ThreadForce& e : thread_forces_) {  // in attachment order, as add_forces
+      for (const ForceEffect& e : thread_forces_) {  // in attachment order, as add_forces
         if (e.local)
           e.effect->local_forces(s_, x[(j + 1) & 1], first, last);
         else

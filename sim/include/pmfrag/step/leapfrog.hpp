@@ -89,7 +89,7 @@ class Leapfrog {
   long resident_steps(detail::Team& team, long steps);
   State<D> s_;
   std::vector<std::unique_ptr<Effect<D>>> effects_;
-  std::vector<Effect<D>*> fused_force_, force_, after_move_, observe_, step_limit_;
+  std::vector<Effect<D>*> fused_force_, after_move_, observe_, step_limit_;
   /// 1/g per degree of freedom (N x D), for the flat update pass; only if mass_runs_ is empty
   std::vector<double> inv_mass_dof_;
   /// Runs of degrees of freedom [begin, end) sharing one 1/g (g^-1), ascending; empty if there are too many
@@ -102,13 +102,14 @@ class Leapfrog {
   AlignedVector<double> moves_;  ///< per thread, a cache line: the last move's largest squared component, bad
                                ///< count (and, in resident steps, the events its last forces found)
   std::vector<Effect<D>*> resident_;
-  std::vector<char> force_local_;  ///< per force_ entry: a local force (stage::local_force)
-  /// resident steps: the effects whose forces a thread computes on its share (resident or local), in order
-  struct ThreadForce {
+  struct ForceEffect {
     Effect<D>* effect;
-    bool local;  ///< stage::local_force (else stage::resident)
+    bool local;  ///< stage::local_force
   };
-  std::vector<ThreadForce> thread_forces_;
+  /// the force stage (stage::force or stage::local_force), in attachment order
+  std::vector<ForceEffect> force_;
+  /// resident steps: the effects whose forces a thread computes on its share (resident or local), in order
+  std::vector<ForceEffect> thread_forces_;
   bool resident_ok_ = true;     ///< every effect acting in a step has resident steps
   bool assigned_ = false;       ///< the step's first forces set f (stage::assigns_forces): the move keeps it
   long resident_taken_ = 0;  ///< steps completed inside resident blocks
