@@ -53,7 +53,7 @@ double system_dt_limit(const System& sys, bool at_r_min = true);
 double pair_dt_limit(const System& sys, bool at_r_min = true);
 
 /// The leapfrog limit of the body at rest, 2/sqrt(lambda_max(M^-1 K)) with K the stiffness of the original
-/// bonds at their initial lengths, by power iteration; infinite if there are no bonds.
+/// bonds at their initial lengths, by Lanczos iteration; infinite if there are no bonds.
 double lattice_dt_limit(const System& sys);
 
 /// lattice_dt_limit / pair_dt_limit(stretch), at most 1 (0.408 for the triangular lattice).
