@@ -547,6 +547,15 @@ Scene parse_scene(const std::string& text, const std::string& file, const std::v
     sc.output.every = t.positive("every", 1e-4);
     sc.output.checkpoint_every = t.number("checkpoint_every", 0.0);
     if (sc.output.checkpoint_every < 0.0) t.fail_at(t.get("checkpoint_every"), "checkpoint_every", "must be >= 0");
+    const std::string precision = t.string("precision", "double");
+    if (precision != "double" && precision != "single")
+      t.fail_at(t.get("precision"), "precision", "must be \"double\" or \"single\" (got \"" + precision + "\")");
+    sc.output.single_precision = precision == "single";
+    if (const toml::node* g = t.get("gzip")) {
+      const long level = t.integer(*g, "gzip");
+      if (level < 0 || level > 9) t.fail_at(g, "gzip", "must be a level from 0 (none) to 9 (got " + std::to_string(level) + ")");
+      sc.output.gzip_level = static_cast<int>(level);
+    }
     t.done();
   }
   top.done();

@@ -86,12 +86,14 @@ struct Series {
   std::vector<hsize_t> shape;  // per-frame shape of value
 
   Series() = default;
-  Series(hid_t parent, const char* name, std::vector<hsize_t> frame_shape, hid_t value_type)
+  // `stored`: the value's type on disk, if not `value_type` (HDF5 converts on write); `gzip`: deflate level.
+  Series(hid_t parent, const char* name, std::vector<hsize_t> frame_shape, hid_t value_type, hid_t stored = -1,
+         int gzip = 0)
       : type(value_type), shape(std::move(frame_shape)) {
     group = make_group(parent, name);
     step = grow(group, "step", H5T_NATIVE_LONG, {});
     time = grow(group, "time", H5T_NATIVE_DOUBLE, {});
-    value = grow(group, "value", type, shape);
+    value = grow(group, "value", stored >= 0 ? stored : type, shape, gzip);
     string_attribute(time, "unit", "s");
   }
   // Reopens an existing element and cuts it to `keep` frames.
@@ -116,7 +118,7 @@ struct Series {
     }
     return s;
   }
-  static hid_t grow(hid_t g, const char* name, hid_t t, const std::vector<hsize_t>& frame) {
+  static hid_t grow(hid_t g, const char* name, hid_t t, const std::vector<hsize_t>& frame, int gzip = 0) {
     std::vector<hsize_t> dims{0}, maxd{H5S_UNLIMITED}, chunk{frame.empty() ? hsize_t(256) : hsize_t(1)};
     for (auto s : frame) dims.push_back(s), maxd.push_back(s), chunk.push_back(s);
     hid_t space = H5Screate_simple(static_cast<int>(dims.size()), dims.data(), maxd.data());
@@ -125,6 +127,13 @@ struct Series {
     // Per-frame chunks are written once: a checksum lets a reader tell an altered frame from a good one.
     // (Series of scalars share chunks of 256 that are rewritten in place, so they stay unfiltered.)
     if (!frame.empty()) H5Pset_fletcher32(plist);
+    if (gzip > 0) {
+      // The shuffle groups the values' bytes by significance, which is what lets deflate find runs in floats.
+      if (H5Zfilter_avail(H5Z_FILTER_DEFLATE) <= 0)
+        throw std::runtime_error("output.gzip: this HDF5 library has no deflate filter");
+      H5Pset_shuffle(plist);
+      H5Pset_deflate(plist, static_cast<unsigned>(gzip));
+    }
     hid_t d = checked(H5Dcreate2(g, name, t, space, H5P_DEFAULT, plist, H5P_DEFAULT), name);
     H5Pclose(plist), H5Sclose(space);
     return d;
@@ -241,9 +250,13 @@ H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& 
     H5Aclose(a), H5Sclose(space), H5Tclose(type);
   }
   H5Gclose(box);
-  m.position = Series(m.particles, "position", {n, dim}, H5T_NATIVE_DOUBLE);
+  // Frames in single precision are stored as IEEE 32-bit floats; every reader asks for doubles and HDF5
+  // converts, so nothing downstream changes.
+  const hid_t stored = scene.output.single_precision ? H5T_IEEE_F32LE : H5T_IEEE_F64LE;
+  const int gzip = scene.output.gzip_level;
+  m.position = Series(m.particles, "position", {n, dim}, H5T_NATIVE_DOUBLE, stored, gzip);
   string_attribute(m.position.value, "unit", "cm");
-  m.velocity = Series(m.particles, "velocity", {n, dim}, H5T_NATIVE_DOUBLE);
+  m.velocity = Series(m.particles, "velocity", {n, dim}, H5T_NATIVE_DOUBLE, stored, gzip);
   string_attribute(m.velocity.value, "unit", "cm s-1");
   std::vector<int> ids(n);
   std::vector<double> mass(n);

@@ -97,6 +97,12 @@ struct TimeSpec {
 struct OutputSpec {
   double every = 1e-4;            ///< s between frames
   double checkpoint_every = 0.0;  ///< s between checkpoints (0: every 10 frames)
+  /// Frames' positions and velocities as 64-bit ("double") or 32-bit ("single") floats. Single halves a frame
+  /// and rounds each value to 2^-24 of itself (6e-7 cm on a 10 cm body); checkpoints, and so --resume, stay
+  /// double.
+  bool single_precision = false;
+  /// HDF5's deflate (gzip, level 1-9; 0 = none) on frames, after its byte shuffle. Debian's HDF5 has it.
+  int gzip_level = 0;
 };
 
 struct Scene {

@@ -1,0 +1,77 @@
+// Frames at scale: output.precision = "single" and output.gzip store the same run in fewer bytes. Readers get
+// doubles either way; single-precision values are the double run's values rounded once to float.
+#include "pmfrag/analysis/fragments.hpp"
+#include "pmfrag/io/h5md.hpp"
+#include "pmfrag/run/run.hpp"
+#include "test_helpers.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace pmfrag;
+namespace fs = std::filesystem;
+
+namespace {
+fs::path plate_run(const std::string& name, const std::vector<std::string>& output) {
+  const fs::path d = test::temp_dir(name);
+  std::vector<std::string> set{"time.end=3e-3", "time.dt=2e-7", "output.every=2e-4"};
+  set.insert(set.end(), output.begin(), output.end());
+  RunOptions ro;
+  ro.out_dir = d.string();
+  ro.force = true;
+  EXPECT_TRUE(run_scene(read_scene(test::case_path("slit_plate_3_5.toml"), set), ro).completed);
+  return d;
+}
+}  // namespace
+
+TEST(Frames, SingleAndGzipHoldTheDoubleRunRoundedOnceAndTakeFewerBytes) {
+  const fs::path plain = plate_run("frames_double", {});
+  const fs::path small = plate_run("frames_single", {"output.precision=\"single\"", "output.gzip=4"});
+  const fs::path zipped = plate_run("frames_gzip", {"output.gzip=4"});
+  H5mdReader a((plain / "trajectory.h5").string()), b((small / "trajectory.h5").string()),
+      z((zipped / "trajectory.h5").string());
+  ASSERT_EQ(a.frames(), 16);
+  ASSERT_EQ(b.frames(), a.frames());
+  ASSERT_EQ(z.frames(), a.frames());
+  double largest_error = 0.0;
+  for (long k = 0; k < a.frames(); ++k) {
+    const auto fa = a.frame(k), fb = b.frame(k), fz = z.frame(k);
+    ASSERT_EQ(fa.position, fz.position) << "gzip is lossless";
+    ASSERT_EQ(fa.velocity, fz.velocity);
+    ASSERT_EQ(fa.position.size(), fb.position.size());
+    for (std::size_t i = 0; i < fa.position.size(); ++i) {
+      ASSERT_EQ(fb.position[i], static_cast<double>(static_cast<float>(fa.position[i]))) << "frame " << k << " value " << i;
+      ASSERT_EQ(fb.velocity[i], static_cast<double>(static_cast<float>(fa.velocity[i])));
+      largest_error = std::max(largest_error, std::abs(fb.position[i] - fa.position[i]));
+    }
+  }
+  // The plate spans 8 x 11.4 cm: a float's half ulp at 8 cm is 2^-21 cm = 4.8e-7 cm.
+  EXPECT_GT(largest_error, 0.0);
+  EXPECT_LE(largest_error, 4.8e-7);
+  const auto bytes = [](const fs::path& d) { return static_cast<double>(fs::file_size(d / "trajectory.h5")); };
+  EXPECT_LT(bytes(zipped), 0.9 * bytes(plain));
+  EXPECT_LT(bytes(small), 0.5 * bytes(plain)) << bytes(small) << " against " << bytes(plain);
+  // The bond record is exact in any precision, so the fragments are the same.
+  const auto fa = analysis::analyse_fragments((plain / "trajectory.h5").string(), {});
+  const auto fb = analysis::analyse_fragments((small / "trajectory.h5").string(), {});
+  ASSERT_EQ(fa.timeline.size(), fb.timeline.size());
+  for (std::size_t k = 0; k < fa.timeline.size(); ++k) {
+    EXPECT_EQ(fa.timeline[k].broken, fb.timeline[k].broken);
+    EXPECT_EQ(fa.timeline[k].fragments, fb.timeline[k].fragments);
+  }
+}
+
+TEST(Frames, BadPrecisionOrLevelIsRefusedNamingTheKey) {
+  const auto refused = [](const std::string& set, const std::string& expect) {
+    try {
+      (void)read_scene(test::case_path("slit_plate_3_5.toml"), {set});
+      ADD_FAILURE() << set << " was accepted";
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find(expect), std::string::npos) << e.what();
+    }
+  };
+  refused("output.precision=\"half\"", "output.precision");
+  refused("output.gzip=10", "output.gzip");
+  refused("output.gzip=2.5", "output.gzip");
+}
