@@ -48,6 +48,7 @@ render::FramePicture picture(const TrajectoryFrame& f, const std::vector<double>
   render::FramePicture p;
   const std::size_t n = values.size(), d = static_cast<std::size_t>(dim);
   std::vector<std::uint8_t> drawn(n, 0);
+  p.xyz.reserve(3 * n), p.value.reserve(n);
   auto at = [&](const std::vector<double>& x, std::size_t i, std::size_t c) { return c < d ? x[i * d + c] : 0.0; };
   for (std::size_t i = 0; i < n; ++i) {
     if (cut_axis >= 0 && first.position[i * d + static_cast<std::size_t>(cut_axis)] > cut_at) continue;
@@ -126,6 +127,7 @@ void run(const RenderCli& o) {
   // Only the leading frames that read back whole (a cut file, a frame failing its checksum): the sequence is
   // then marked partial, on the terminal and in frames/PARTIAL.txt.
   long frames = rd.frames();
+  TrajectoryFrame f;  // one buffer for every pass over the frames: millions of particles are not reallocated per frame
   std::string damage = analysis::trajectory_caveats(rd);  // a damaged file, a run short of its end
   for (long k = 0; k < frames; ++k) {
     if (!states.covers(k)) {
@@ -134,7 +136,7 @@ void run(const RenderCli& o) {
       break;
     }
     try {
-      (void)rd.frame(k);
+      rd.frame(k, f);
     } catch (const std::exception& e) {
       analysis::add_note(damage, "frame " + std::to_string(k) + " unreadable (" + e.what() + ")");
       frames = k;
@@ -146,7 +148,6 @@ void run(const RenderCli& o) {
                  damage.c_str(), frames - 1);
   const std::vector<double> times = rd.times();
   const TrajectoryFrame first = rd.frame(0);
-  const TrajectoryFrame last = rd.frame(frames - 1);
 
   render::View view;
   view.xmin = view.ymin = 1e300;
@@ -181,7 +182,7 @@ void run(const RenderCli& o) {
     if (o.field != "damage") {
       analysis::BondStates probe = analysis::BondStates::open(rd, std::nullopt);
       for (long k = 0; k < frames; ++k) {
-        const auto f = rd.frame(k);
+        rd.frame(k, f);
         probe.advance(k, f.position);
         const auto labels = tracker.label(probe.broken());
         const auto v = analysis::particle_field(o.field, {f, first, labels, species, mass, dim});
@@ -220,7 +221,7 @@ void run(const RenderCli& o) {
   }
   std::vector<long> panel_frames;
   for (double a : panel_at) {
-    const double t = a * last.time;
+    const double t = a * times[static_cast<std::size_t>(frames - 1)];
     long best = 0;
     for (long k = 0; k < frames; ++k)
       if (std::fabs(times[static_cast<std::size_t>(k)] - t) < std::fabs(times[static_cast<std::size_t>(best)] - t)) best = k;
@@ -236,7 +237,7 @@ void run(const RenderCli& o) {
   long rendered = 0;
   render::PngQueue png_queue;  // frames are encoded while the next one renders
   for (long k = 0; k < frames; ++k) {
-    const auto f = rd.frame(k);
+    rd.frame(k, f);
     states.advance(k, f.position);  // every frame: the distance reading is history-dependent
     const auto lab = tracker.label(states.broken());
     const bool want_frame = !o.no_frames && (k % o.every == 0 || k == frames - 1);

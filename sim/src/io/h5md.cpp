@@ -576,8 +576,13 @@ H5mdReader::~H5mdReader() {
 }
 
 TrajectoryFrame H5mdReader::frame(long index) const {
-  if (index < 0 || index >= frames_) throw std::out_of_range("frame index");
   TrajectoryFrame f;
+  frame(index, f);
+  return f;
+}
+
+void H5mdReader::frame(long index, TrajectoryFrame& f) const {
+  if (index < 0 || index >= frames_) throw std::out_of_range("frame index");
   auto read_slab = [&](const char* path, std::vector<double>& out) {
     hid_t d = H5Dopen2(file_, path, H5P_DEFAULT);
     hid_t fspace = H5Dget_space(d);
@@ -594,7 +599,6 @@ TrajectoryFrame H5mdReader::frame(long index) const {
   const auto times = read_all<double>(file_, "/particles/all/position/time");
   f.step = steps[static_cast<std::size_t>(index)];
   f.time = times[static_cast<std::size_t>(index)];
-  return f;
 }
 
 std::vector<double> H5mdReader::times() const {

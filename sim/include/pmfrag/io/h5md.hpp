@@ -86,6 +86,8 @@ class H5mdReader {
   std::size_t particles() const { return n_; }
   long frames() const { return frames_; }
   TrajectoryFrame frame(long index) const;
+  /// The same, into `into`'s buffers (a reader going through frames of millions of particles reuses them).
+  void frame(long index, TrajectoryFrame& into) const;
   /// Times of the frames [s] (cheap: no particle data is read).
   std::vector<double> times() const;
   std::vector<std::array<int, 2>> bonds() const;
