@@ -106,6 +106,8 @@ void run(const RenderCli& o) {
   }
 
   H5mdReader rd((dir / "trajectory.h5").string());
+  if (o.field == "speed" && !rd.has_velocity())
+    throw UsageError("--field speed: " + o.dir + " holds no velocities (its scene's output.fields left them out)");
   const int dim = rd.dim();
   // --cut AXIS=VALUE keeps the particles on the near side of a plane (3-D: the interior shows on the cut).
   int cut_axis = -1;

@@ -81,6 +81,8 @@ std::vector<double> positions_at(const H5mdReader& rd, double t) {
     if (std::fabs(times[static_cast<std::size_t>(k)] - t) < std::fabs(times[static_cast<std::size_t>(best)] - t)) best = k;
   const TrajectoryFrame f = rd.frame(best);
   std::vector<double> x = f.position;
+  if (f.velocity.empty())
+    throw std::runtime_error("the study's runs need velocities in their frames (output.fields left them out)");
   for (std::size_t i = 0; i < x.size(); ++i) x[i] += f.velocity[i] * (t - f.time);
   return x;
 }

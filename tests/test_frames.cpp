@@ -1,6 +1,8 @@
 // Frames at scale: output.precision = "single" and output.gzip store the same run in fewer bytes. Readers get
 // doubles either way; single-precision values are the double run's values rounded once to float.
+#include "pmfrag/analysis/export_vtk.hpp"
 #include "pmfrag/analysis/fragments.hpp"
+#include "pmfrag/body/system.hpp"
 #include "pmfrag/io/h5md.hpp"
 #include "pmfrag/run/run.hpp"
 #include "test_helpers.hpp"
@@ -74,4 +76,86 @@ TEST(Frames, BadPrecisionOrLevelIsRefusedNamingTheKey) {
   refused("output.precision=\"half\"", "output.precision");
   refused("output.gzip=10", "output.gzip");
   refused("output.gzip=2.5", "output.gzip");
+}
+
+TEST(Frames, PositionsOnlyLeaveVelocitiesOutAndTheirBytes) {
+  const fs::path plain = plate_run("frames_all", {});
+  const fs::path lean = plate_run("frames_positions", {"output.fields=[\"position\"]"});
+  H5mdReader a((plain / "trajectory.h5").string()), b((lean / "trajectory.h5").string());
+  ASSERT_TRUE(a.has_velocity());
+  ASSERT_FALSE(b.has_velocity());
+  ASSERT_EQ(b.frames(), a.frames());
+  for (long k = 0; k < a.frames(); ++k) {
+    const auto fa = a.frame(k), fb = b.frame(k);
+    ASSERT_EQ(fa.position, fb.position) << "frame " << k << ": leaving velocities out changes no position";
+    ASSERT_TRUE(fb.velocity.empty());
+  }
+  // The file is smaller by the velocity frames' bytes (N x 2 doubles a frame), give or take HDF5's headers.
+  const double saved = static_cast<double>(fs::file_size(plain / "trajectory.h5")) -
+                       static_cast<double>(fs::file_size(lean / "trajectory.h5"));
+  const double velocity_bytes = static_cast<double>(a.frames()) * static_cast<double>(a.particles()) * 2 * 8;
+  EXPECT_GT(saved, 0.98 * velocity_bytes);
+  EXPECT_LT(saved, 1.05 * velocity_bytes);
+  EXPECT_EQ(a.observable("kinetic_energy"), b.observable("kinetic_energy"));
+
+  // Fragments are the same; their velocities are unknown (NaN), not zero.
+  const auto ra = analysis::analyse_fragments((plain / "trajectory.h5").string(), {});
+  const auto rb = analysis::analyse_fragments((lean / "trajectory.h5").string(), {});
+  ASSERT_EQ(ra.final_fragments.size(), rb.final_fragments.size());
+  for (std::size_t g = 0; g < ra.final_fragments.size(); ++g) {
+    EXPECT_EQ(ra.final_fragments[g].particles, rb.final_fragments[g].particles);
+    EXPECT_EQ(ra.final_fragments[g].center, rb.final_fragments[g].center);
+    EXPECT_TRUE(std::isfinite(ra.final_fragments[g].velocity.y()));
+    EXPECT_TRUE(std::isnan(rb.final_fragments[g].velocity.y()));
+  }
+
+  // Export writes what it can by default, and refuses a field that needs velocities by name.
+  const auto res = analysis::export_vtk(lean.string(), {});
+  EXPECT_EQ(res.frames_written, b.frames());
+  analysis::ExportOptions speed;
+  speed.fields = {"id", "speed"};
+  try {
+    (void)analysis::export_vtk(lean.string(), speed);
+    ADD_FAILURE() << "speed exported without velocities";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'speed' needs velocities"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Frames, AResumedPositionsOnlyTrajectoryStaysWithoutVelocities) {
+  // The writer's resume path: reopen, keep 2 of 3 frames, append one.
+  const fs::path d = test::temp_dir("frames_reopen");
+  const Scene sc = read_scene(test::case_path("slit_plate_3_5.toml"), {"output.fields=[\"position\"]"});
+  const System sys = build_system(sc);
+  RunParameters run;
+  run.dt = 1e-7, run.end = 1e-6;
+  const std::string path = (d / "trajectory.h5").string();
+  std::vector<double> x(sys.size() * 2, 1.0), v(sys.size() * 2, 2.0);
+  {
+    H5mdWriter w(path, sys, sc, run);
+    for (long k = 0; k < 3; ++k) w.write_frame(k, 1e-7 * static_cast<double>(k), x, v, {});
+  }
+  {
+    H5mdWriter w(path, 2, 0);
+    x.assign(x.size(), 5.0);
+    w.write_frame(9, 9e-7, x, v, {});
+  }
+  H5mdReader rd(path);
+  EXPECT_FALSE(rd.has_velocity());
+  ASSERT_EQ(rd.frames(), 3);
+  EXPECT_EQ(rd.frame(1).position[0], 1.0);
+  EXPECT_EQ(rd.frame(2).position[0], 5.0);
+  EXPECT_EQ(rd.frame(2).step, 9);
+}
+
+TEST(Frames, FieldsWithoutPositionOrUnknownAreRefusedNamingTheKey) {
+  for (const std::string set : {"output.fields=[\"velocity\"]", "output.fields=[\"position\", \"force\"]",
+                                "output.fields=\"position\""}) {
+    try {
+      (void)read_scene(test::case_path("slit_plate_3_5.toml"), {set});
+      ADD_FAILURE() << set << " was accepted";
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find("output.fields"), std::string::npos) << set << ": " << e.what();
+    }
+  }
 }

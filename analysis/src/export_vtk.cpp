@@ -223,7 +223,18 @@ ExportResult export_vtk(const std::string& run_dir, const ExportOptions& opt) {
   FragmentTracker tracker(st.n, st.bonds, st.mass);
   fs::create_directories(dir / "vtk");
   std::vector<std::pair<double, std::string>> written;
-  FrameGrid grid(st, opt.fields, opt.compression);
+  std::set<std::string> fields = opt.fields;
+  if (!rd.has_velocity()) {  // the run's output.fields left velocities out
+    static const std::set<std::string> need{"velocity", "speed", "kinetic_energy"};
+    for (const auto& name : fields)
+      if (need.count(name))
+        throw std::invalid_argument("--fields: '" + name + "' needs velocities, and this run's frames hold none "
+                                    "(its scene's output.fields left them out)");
+    if (fields.empty())
+      for (const auto& name : export_fields())
+        if (!need.count(name)) fields.insert(name);
+  }
+  FrameGrid grid(st, fields, opt.compression);
   TrajectoryFrame f, first;
   const long frames = rd.frames();
   for (long k = 0; k < frames; ++k) {

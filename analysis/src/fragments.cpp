@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <stdexcept>
 
@@ -152,10 +153,13 @@ std::vector<Fragment> describe_fragments(const FrameLabels& l, const TrajectoryF
   const std::size_t n = mass.size(), d = static_cast<std::size_t>(dim);
   const int count = l.fragment_id.empty() ? 0 : *std::max_element(l.fragment_id.begin(), l.fragment_id.end()) + 1;
   std::vector<Fragment> out(static_cast<std::size_t>(count));
+  const bool moving = !f.velocity.empty();  // frames without velocities (output.fields): NaN, not 0
   for (std::size_t i = 0; i < n; ++i) {
     Fragment& g = out[static_cast<std::size_t>(l.fragment_id[i])];
     Eigen::Vector3d x = Eigen::Vector3d::Zero(), v = Eigen::Vector3d::Zero();
-    for (std::size_t c = 0; c < d; ++c) x[static_cast<Eigen::Index>(c)] = f.position[i * d + c], v[static_cast<Eigen::Index>(c)] = f.velocity[i * d + c];
+    for (std::size_t c = 0; c < d; ++c)
+      x[static_cast<Eigen::Index>(c)] = f.position[i * d + c],
+      v[static_cast<Eigen::Index>(c)] = moving ? f.velocity[i * d + c] : std::numeric_limits<double>::quiet_NaN();
     g.particles += 1;
     g.mass += mass[i];
     g.center += mass[i] * x;

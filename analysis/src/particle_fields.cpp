@@ -30,6 +30,9 @@ std::vector<double> particle_field(const std::string& name, const FieldFrame& at
   if (name == "fragment_id") return fill([&](std::size_t i) { return static_cast<double>(at.labels.fragment_id[i]); });
   if (name == "fragment_size") return fill([&](std::size_t i) { return static_cast<double>(at.labels.fragment_size[i]); });
   if (name == "displacement") return fill([&](std::size_t i) { return std::sqrt(squared(moved, i)); });
+  if ((name == "speed" || name == "kinetic_energy") && at.frame.velocity.empty())
+    throw std::invalid_argument("'" + name + "' needs velocities, and this run's frames hold none (its scene's "
+                                "output.fields left them out)");
   if (name == "speed") return fill([&](std::size_t i) { return std::sqrt(squared(velocity, i)); });
   if (name == "kinetic_energy") return fill([&](std::size_t i) { return 0.5 * at.mass[i] * squared(velocity, i); });
   if (name == "damage") return fill([&](std::size_t i) { return at.labels.damage[i]; });

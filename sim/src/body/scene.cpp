@@ -556,6 +556,19 @@ Scene parse_scene(const std::string& text, const std::string& file, const std::v
       if (level < 0 || level > 9) t.fail_at(g, "gzip", "must be a level from 0 (none) to 9 (got " + std::to_string(level) + ")");
       sc.output.gzip_level = static_cast<int>(level);
     }
+    if (const toml::node* f = t.get("fields")) {
+      const toml::array* list = f->as_array();
+      if (!list) t.fail_at(f, "fields", "must be a list of field names, e.g. [\"position\", \"velocity\"]");
+      bool position = false, velocity = false;
+      for (const toml::node& e : *list) {
+        const auto name = e.value<std::string>();
+        if (name && *name == "position") position = true;
+        else if (name && *name == "velocity") velocity = true;
+        else t.fail_at(&e, "fields", "knows \"position\" and \"velocity\" (got " + (name ? "\"" + *name + "\"" : std::string("a non-string")) + ")");
+      }
+      if (!position) t.fail_at(f, "fields", "must hold \"position\": fragments, export and render read positions");
+      sc.output.velocity = velocity;
+    }
     t.done();
   }
   top.done();

@@ -256,8 +256,10 @@ H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& 
   const int gzip = scene.output.gzip_level;
   m.position = Series(m.particles, "position", {n, dim}, H5T_NATIVE_DOUBLE, stored, gzip);
   string_attribute(m.position.value, "unit", "cm");
-  m.velocity = Series(m.particles, "velocity", {n, dim}, H5T_NATIVE_DOUBLE, stored, gzip);
-  string_attribute(m.velocity.value, "unit", "cm s-1");
+  if (scene.output.velocity) {  // output.fields may leave it out
+    m.velocity = Series(m.particles, "velocity", {n, dim}, H5T_NATIVE_DOUBLE, stored, gzip);
+    string_attribute(m.velocity.value, "unit", "cm s-1");
+  }
   std::vector<int> ids(n);
   std::vector<double> mass(n);
   for (std::size_t i = 0; i < n; ++i) ids[i] = static_cast<int>(i), mass[i] = sys.phase_mass[static_cast<std::size_t>(sys.phase[i])];
@@ -363,7 +365,8 @@ H5mdWriter::H5mdWriter(const std::string& path, long keep_frames, long keep_even
     H5Ldelete(m.file, "/parameters/incomplete", H5P_DEFAULT);
   m.particles = checked(H5Gopen2(m.file, "/particles/all", H5P_DEFAULT), "particles");
   m.position = Series::reopen(m.particles, "position", H5T_NATIVE_DOUBLE, keep);
-  m.velocity = Series::reopen(m.particles, "velocity", H5T_NATIVE_DOUBLE, keep);
+  if (H5Lexists(m.particles, "velocity", H5P_DEFAULT) > 0)
+    m.velocity = Series::reopen(m.particles, "velocity", H5T_NATIVE_DOUBLE, keep);
   m.obs_group = checked(H5Gopen2(m.file, "/observables", H5P_DEFAULT), "observables");
   for (const char* name : observable_names) m.observables.emplace(name, Series::reopen(m.obs_group, name, H5T_NATIVE_DOUBLE, keep));
   frames_ = keep_frames;
@@ -383,7 +386,7 @@ void H5mdWriter::write_frame(long step, double time, const std::vector<double>& 
   auto& m = *impl_;
   const hsize_t k = static_cast<hsize_t>(frames_);
   m.position.append(k, step, time, position.data());
-  m.velocity.append(k, step, time, velocity.data());
+  if (m.velocity.group >= 0) m.velocity.append(k, step, time, velocity.data());
   const double total = obs.kinetic + obs.potential;
   const double beyond = static_cast<double>(obs.pairs_beyond_cutoff);
   const double balance = obs.balance();
@@ -545,6 +548,7 @@ H5mdReader::H5mdReader(const std::string& path) : path_(path) {
   const auto dims = dims_of(d);
   H5Dclose(d);
   frames_ = static_cast<long>(dims[0]);
+  has_velocity_ = H5Lexists(file_, "/particles/all/velocity", H5P_DEFAULT) > 0;
   n_ = dims[1];
   dim_ = static_cast<int>(dims[2]);
   // The step/time series can be shorter than value if a run was killed mid-frame: trust the shortest.
@@ -555,7 +559,7 @@ H5mdReader::H5mdReader(const std::string& path) : path_(path) {
     while (ok < frames_) {
       const hsize_t k = static_cast<hsize_t>(ok);
       if (!chunk_before(file_, "/particles/all/position/value", k, limit) ||
-          !chunk_before(file_, "/particles/all/velocity/value", k, limit) ||
+          (has_velocity_ && !chunk_before(file_, "/particles/all/velocity/value", k, limit)) ||
           !chunk_before(file_, "/particles/all/position/time", k, limit) ||
           !chunk_before(file_, "/particles/all/position/step", k, limit))
         break;
@@ -594,7 +598,10 @@ void H5mdReader::frame(long index, TrajectoryFrame& f) const {
     H5Sclose(mspace), H5Sclose(fspace), H5Dclose(d);
   };
   read_slab("/particles/all/position/value", f.position);
-  read_slab("/particles/all/velocity/value", f.velocity);
+  if (has_velocity_)
+    read_slab("/particles/all/velocity/value", f.velocity);
+  else
+    f.velocity.clear();
   const auto steps = read_all<long>(file_, "/particles/all/position/step");
   const auto times = read_all<double>(file_, "/particles/all/position/time");
   f.step = steps[static_cast<std::size_t>(index)];

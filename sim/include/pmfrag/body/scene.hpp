@@ -103,6 +103,9 @@ struct OutputSpec {
   bool single_precision = false;
   /// HDF5's deflate (gzip, level 1-9; 0 = none) on frames, after its byte shuffle. Debian's HDF5 has it.
   int gzip_level = 0;
+  /// `fields = ["position"]` leaves velocities out of the frames (half a frame): fragment velocities, speed and
+  /// kinetic energy per particle are then unknown to the readers. Positions are always written.
+  bool velocity = true;
 };
 
 struct Scene {

@@ -68,7 +68,7 @@ struct BondRecord {
 struct TrajectoryFrame {
   long step = 0;
   double time = 0.0;
-  std::vector<double> position, velocity;  ///< N x dim
+  std::vector<double> position, velocity;  ///< N x dim; velocity empty if the run left it out (output.fields)
 };
 
 /// Reads a trajectory, including a damaged one: a file cut short (a copy that stopped, a full disk) is read
@@ -85,6 +85,8 @@ class H5mdReader {
   int dim() const { return dim_; }
   std::size_t particles() const { return n_; }
   long frames() const { return frames_; }
+  /// Whether frames hold velocities (a scene's `output.fields = ["position"]` leaves them out).
+  bool has_velocity() const { return has_velocity_; }
   TrajectoryFrame frame(long index) const;
   /// The same, into `into`'s buffers (a reader going through frames of millions of particles reuses them).
   void frame(long index, TrajectoryFrame& into) const;
@@ -118,6 +120,7 @@ class H5mdReader {
   int dim_ = 2;
   std::size_t n_ = 0;
   long frames_ = 0;
+  bool has_velocity_ = true;
   std::string damage_, padded_copy_;
 };
 
