@@ -383,10 +383,17 @@ H5mdWriter::~H5mdWriter() {
 
 void H5mdWriter::write_frame(long step, double time, const std::vector<double>& position,
                              const std::vector<double>& velocity, const Observables& obs) {
+  write_frame(step, time, position.data(), velocity.data(), obs);
+}
+
+bool H5mdWriter::writes_velocity() const { return impl_->velocity.group >= 0; }
+
+void H5mdWriter::write_frame(long step, double time, const double* position, const double* velocity,
+                             const Observables& obs) {
   auto& m = *impl_;
   const hsize_t k = static_cast<hsize_t>(frames_);
-  m.position.append(k, step, time, position.data());
-  if (m.velocity.group >= 0) m.velocity.append(k, step, time, velocity.data());
+  m.position.append(k, step, time, position);
+  if (m.velocity.group >= 0) m.velocity.append(k, step, time, velocity);
   const double total = obs.kinetic + obs.potential;
   const double beyond = static_cast<double>(obs.pairs_beyond_cutoff);
   const double balance = obs.balance();

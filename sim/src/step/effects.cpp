@@ -87,6 +87,7 @@ class Kinematic final : public Effect<D> {
   void save(std::vector<double>& out) const override {
     out.insert(out.end(), {left_sum_, g0_, g_, static_cast<double>(tallied_step_)});
   }
+  std::size_t saved_size() const override { return 4; }
   void load(const double*& in) override {
     left_sum_ = *in++, g0_ = *in++, g_ = *in++;
     tallied_step_ = static_cast<long>(*in++);

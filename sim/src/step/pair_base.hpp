@@ -63,6 +63,7 @@ class PairBase : public Effect<D> {
     out.push_back(static_cast<double>(broke_count_));
     out.push_back(static_cast<double>(re_formed_count_));
   }
+  std::size_t saved_size() const override { return 2 * alive_.size() + 5; }
   void load(const double*& in) override {
     first_break_step_ = static_cast<long>(*in++);
     first_break_time_ = *in++;

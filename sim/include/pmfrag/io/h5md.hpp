@@ -37,6 +37,10 @@ class H5mdWriter {
   /// With it, the number of bond-record rows written so far (every event up to this step: append them first).
   void write_frame(long step, double time, const std::vector<double>& position, const std::vector<double>& velocity,
                    const Observables& obs);
+  /// The same from N x dim arrays in place (the integrator's own, no copy); `velocity` is not read when the
+  /// frames leave velocities out (writes_velocity()).
+  void write_frame(long step, double time, const double* position, const double* velocity, const Observables& obs);
+  bool writes_velocity() const;
   /// Appends rows to the bond record (/connectivity/broken_bonds), in step order; on disk at the next flush.
   void append_bond_events(const std::vector<BondEvent>& events);
   /// Writes everything appended so far to disk (write_frame does it too).

@@ -155,6 +155,8 @@ class Effect {
   /// History an effect carries between steps (broken bonds, tallied work), appended as doubles for a
   /// checkpoint, and read back in the same order.
   virtual void save(std::vector<double>&) const {}
+  /// How many values save() appends (a hint for one allocation).
+  virtual std::size_t saved_size() const { return 0; }
   virtual void load(const double*&) {}
 
   /// Reports: what the effect knows of the original bonds (the pair effects; others report nothing), and
