@@ -71,11 +71,16 @@ template <>
 hid_t native<long>() { return H5T_NATIVE_LONG; }
 
 template <class T>
-void array_dataset(hid_t parent, const char* name, const std::vector<T>& v, std::vector<hsize_t> dims) {
+void array_dataset(hid_t parent, const char* name, const T* data, std::vector<hsize_t> dims) {
   hid_t space = H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr);
   hid_t d = checked(H5Dcreate2(parent, name, native<T>(), space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name);
-  if (!v.empty()) check(H5Dwrite(d, native<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), name);
+  if (data) check(H5Dwrite(d, native<T>(), H5S_ALL, H5S_ALL, H5P_DEFAULT, data), name);
   H5Dclose(d), H5Sclose(space);
+}
+
+template <class T>
+void array_dataset(hid_t parent, const char* name, const std::vector<T>& v, std::vector<hsize_t> dims) {
+  array_dataset(parent, name, v.empty() ? nullptr : v.data(), std::move(dims));
 }
 
 void scalar_dataset(hid_t parent, const char* name, double value) { array_dataset<double>(parent, name, {value}, {}); }
@@ -767,6 +772,12 @@ std::string H5mdReader::incomplete() const {
 }
 
 void write_checkpoint(const std::string& path, const Checkpoint& c) {
+  if (c.velocity.size() != c.position.size()) throw std::logic_error(path + ": checkpoint velocities and positions differ in count");
+  write_checkpoint(path, c, c.position.data(), c.velocity.data(), c.position.size());
+}
+
+void write_checkpoint(const std::string& path, const Checkpoint& c, const double* position, const double* velocity,
+                      std::size_t values) {
   const std::string tmp = path + ".tmp";
   hid_t f = H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
   if (f < 0) throw std::runtime_error(tmp + ": cannot write checkpoint");
@@ -774,8 +785,8 @@ void write_checkpoint(const std::string& path, const Checkpoint& c) {
   array_dataset<long>(f, "frames", {c.frames}, {});
   array_dataset<long>(f, "bond_events", {c.bond_events}, {});
   array_dataset(f, "time_dt_level_calm", std::vector<double>{c.time, c.dt, double(c.level), double(c.calm)}, {4});
-  array_dataset(f, "position", c.position, {c.position.size()});
-  array_dataset(f, "velocity", c.velocity, {c.velocity.size()});
+  array_dataset(f, "position", values ? position : nullptr, {values});
+  array_dataset(f, "velocity", values ? velocity : nullptr, {values});
   array_dataset(f, "effects", c.effects, {c.effects.size()});
   H5Fclose(f);
   if (std::rename(tmp.c_str(), path.c_str()) != 0) throw std::runtime_error(path + ": cannot rename checkpoint");

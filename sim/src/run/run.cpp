@@ -100,10 +100,8 @@ class RunOutput {
     c.dt = s.dt;
     c.level = levels.level(), c.calm = levels.calm();
     c.frames = writer_.frames();
-    c.position.assign(s.x.data()->data(), s.x.data()->data() + s.size() * D);
-    c.velocity.assign(s.v.data()->data(), s.v.data()->data() + s.size() * D);
     c.effects = lf_.effect_state();
-    write_checkpoint(checkpoint_path_, c);
+    write_checkpoint(checkpoint_path_, c, s.x.data()->data(), s.v.data()->data(), s.size() * D);
   }
 
  private:

@@ -140,6 +140,10 @@ struct Checkpoint {
 };
 /// Written to `path`.tmp and renamed, so a checkpoint on disk is always complete.
 void write_checkpoint(const std::string& path, const Checkpoint& c);
+/// The same with the positions and velocities (`values` doubles each) read in place, not from c's vectors
+/// (a run at millions of particles makes no copy of its state to checkpoint it).
+void write_checkpoint(const std::string& path, const Checkpoint& c, const double* position, const double* velocity,
+                      std::size_t values);
 Checkpoint read_checkpoint(const std::string& path);
 
 }  // namespace pmfrag
