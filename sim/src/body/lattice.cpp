@@ -33,6 +33,8 @@ Sites greenspan_plate() {
 Sites triangular_lattice(double r0, const Vec3& origin, int nx, int ny) {
   Sites s;
   s.dim = 2;
+  s.position.reserve(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny));
+  s.index.reserve(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny));
   int k = 0;
   for (int j = 0; j < ny; ++j)
     for (int i = 0; i < nx; ++i) {
@@ -48,6 +50,8 @@ Sites close_packed_lattice(double r0, const Vec3& origin, int nx, int ny, int nz
   const Vec3 shiftA(0, 0, 0), shiftB(-dx, dy / 3.0, 0), shiftC(-dx, -dy / 3.0, 0);
   Sites s;
   s.dim = 3;
+  const std::size_t sites = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
+  s.position.reserve(sites), s.index.reserve(sites);  // grown by doubling, they would hold up to twice that
   // Stored row by row through the thickness (i fastest, then the section k, then the row j), numbered
   // section by section (index = 1 + i + nx (j + ny k)): a particle's bonds then reach at most one row of
   // every section ahead (nx nz + nx + 1 places, 862 in the paper's block) instead of a whole section

@@ -158,6 +158,7 @@ System build_system(const Scene& sc) {
     sys.bonds.push_back({static_cast<int>(i), static_cast<int>(j)});
   });
   std::sort(sys.bonds.begin(), sys.bonds.end());
+  sys.bonds.shrink_to_fit();  // growth by doubling left up to twice the bonds' bytes for the whole run
 
   // Initial velocities of impactors.
   for (const auto& im : sc.impactors) {

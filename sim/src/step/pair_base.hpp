@@ -35,6 +35,7 @@ class PairBase : public Effect<D> {
     inv_rmin_ = sys.r_min > 0.0 ? 1.0 / sys.r_min : std::numeric_limits<double>::infinity();
     r_min_ = sys.r_min;
     n_ = sys.size();
+    bi_.reserve(sys.bonds.size()), bj_.reserve(sys.bonds.size()), blaw_.reserve(sys.bonds.size());  // no slack
     for (const auto& b : sys.bonds) bi_.push_back(b[0]), bj_.push_back(b[1]), blaw_.push_back(law_of(b[0], b[1]));
     alive_.assign(bi_.size(), 1);
     phi_break_.assign(bi_.size(), 0.0);
