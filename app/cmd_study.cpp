@@ -81,8 +81,10 @@ std::vector<double> positions_at(const H5mdReader& rd, double t) {
     if (std::fabs(times[static_cast<std::size_t>(k)] - t) < std::fabs(times[static_cast<std::size_t>(best)] - t)) best = k;
   const TrajectoryFrame f = rd.frame(best);
   std::vector<double> x = f.position;
+  if (t == f.time) return x;
   if (f.velocity.empty())
-    throw std::runtime_error("the study's runs need velocities in their frames (output.fields left them out)");
+    throw std::runtime_error(rd.path() + ": no velocities to move frame " + std::to_string(best) + " to t = " +
+                             std::to_string(t) + " s (output.fields left them out)");
   for (std::size_t i = 0; i < x.size(); ++i) x[i] += f.velocity[i] * (t - f.time);
   return x;
 }
@@ -130,6 +132,8 @@ Row run_one(const StudyCli& o, const std::string& knob, double value, const std:
 
 void study_accuracy(const StudyCli& o) {
   const Scene sc = read_scene(o.scene, o.set);
+  if (!sc.output.velocity)  // positions between frames are moved there along the velocities
+    throw UsageError(o.scene + ": the accuracy study needs velocities in the frames; drop output.fields = [\"position\"]");
   const System sys = build_system(sc);
   const double limit = choose_step(sc, sys).limit;
   fs::create_directories(o.out);

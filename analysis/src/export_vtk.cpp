@@ -206,6 +206,17 @@ ExportResult export_vtk(const std::string& run_dir, const ExportOptions& opt) {
   if (opt.every < 1) throw std::invalid_argument("--every: must be at least 1");
   const fs::path dir(run_dir);
   H5mdReader rd((dir / "trajectory.h5").string());
+  std::set<std::string> fields = opt.fields;
+  if (!rd.has_velocity()) {  // the run's output.fields left velocities out
+    static const std::set<std::string> need{"velocity", "speed", "kinetic_energy"};
+    for (const auto& name : fields)
+      if (need.count(name))
+        throw std::invalid_argument("--fields: '" + name + "' needs velocities, and the frames of " + run_dir + " hold none "
+                                    "(its scene's output.fields left them out)");
+    if (fields.empty())
+      for (const auto& name : export_fields())
+        if (!need.count(name)) fields.insert(name);
+  }
   ExportResult res;
   res.note = trajectory_caveats(rd);
   res.partial = !res.note.empty();
@@ -223,17 +234,6 @@ ExportResult export_vtk(const std::string& run_dir, const ExportOptions& opt) {
   FragmentTracker tracker(st.n, st.bonds, st.mass);
   fs::create_directories(dir / "vtk");
   std::vector<std::pair<double, std::string>> written;
-  std::set<std::string> fields = opt.fields;
-  if (!rd.has_velocity()) {  // the run's output.fields left velocities out
-    static const std::set<std::string> need{"velocity", "speed", "kinetic_energy"};
-    for (const auto& name : fields)
-      if (need.count(name))
-        throw std::invalid_argument("--fields: '" + name + "' needs velocities, and this run's frames hold none "
-                                    "(its scene's output.fields left them out)");
-    if (fields.empty())
-      for (const auto& name : export_fields())
-        if (!need.count(name)) fields.insert(name);
-  }
   FrameGrid grid(st, fields, opt.compression);
   TrajectoryFrame f, first;
   const long frames = rd.frames();

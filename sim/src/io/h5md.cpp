@@ -396,6 +396,8 @@ bool H5mdWriter::writes_velocity() const { return impl_->velocity.group >= 0; }
 void H5mdWriter::write_frame(long step, double time, const double* position, const double* velocity,
                              const Observables& obs) {
   auto& m = *impl_;
+  if (m.velocity.group >= 0 && !velocity)
+    throw std::logic_error(m.path + ": a frame without the velocities this trajectory stores");
   const hsize_t k = static_cast<hsize_t>(frames_);
   m.position.append(k, step, time, position);
   if (m.velocity.group >= 0) m.velocity.append(k, step, time, velocity);

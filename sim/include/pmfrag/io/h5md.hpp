@@ -86,6 +86,7 @@ class H5mdReader {
   H5mdReader(const H5mdReader&) = delete;
   H5mdReader& operator=(const H5mdReader&) = delete;
   const std::string& damage() const { return damage_; }
+  const std::string& path() const { return path_; }
   int dim() const { return dim_; }
   std::size_t particles() const { return n_; }
   long frames() const { return frames_; }
