@@ -2,6 +2,7 @@
 
 #include "parse.hpp"
 #include "pmfrag/io/folder_lock.hpp"
+#include "pmfrag/analysis/export_mdanalysis.hpp"
 #include "pmfrag/analysis/export_vtk.hpp"
 
 #include <cstdio>
@@ -15,11 +16,28 @@ namespace pmfrag::app {
 namespace {
 
 struct ExportCli {
-  std::string dir, fields, criterion, compress = "lz4";
+  std::string dir, fields, criterion, compress = "lz4", format = "vtk";
   long every = 1;
+  CLI::Option *fields_opt = nullptr, *break_opt = nullptr, *compress_opt = nullptr;
 };
 
+// --format mdanalysis: the frames alone, in MDAnalysis' units (export_mdanalysis.hpp).
+void run_mdanalysis(const ExportCli& o) {
+  for (const CLI::Option* opt : {o.fields_opt, o.break_opt, o.compress_opt})
+    if (opt->count() > 0) throw UsageError(opt->get_name() + " applies to --format vtk only");
+  if (!std::filesystem::exists(std::filesystem::path(o.dir) / "trajectory.h5"))
+    throw UsageError(o.dir + ": no trajectory.h5 (run `pmfrag run SCENE --out DIR` first)");
+  const FolderLock lock(o.dir);  // one writer per run folder
+  analysis::MdanalysisExportOptions opt;
+  opt.every = o.every;
+  const auto r = analysis::export_mdanalysis(o.dir, opt);
+  std::printf("exported %ld frames to %s (MDAnalysis: positions in Angstrom, velocities in Angstrom/ps, time in s)%s\n",
+              r.frames_written, r.path.c_str(), r.partial ? " (PARTIAL)" : "");
+  if (r.partial) std::printf("note: %s\n", r.note.c_str());
+}
+
 void run(const ExportCli& o) {
+  if (o.format == "mdanalysis") return run_mdanalysis(o);
   analysis::ExportOptions opt;
   opt.every = o.every;
   opt.compression = o.compress == "zlib" ? analysis::Compression::zlib
@@ -49,17 +67,21 @@ void run(const ExportCli& o) {
 
 void add_export_command(CLI::App& app) {
   auto o = std::make_shared<ExportCli>();
-  auto* cmd = app.add_subcommand("export", "Write VTU frames and a PVD collection for ParaView");
+  auto* cmd = app.add_subcommand("export", "Write VTU frames and a PVD collection for ParaView, or an H5MD copy for MDAnalysis");
   cmd->add_option("run_dir", o->dir, "Run folder (holds trajectory.h5)")->required();
+  cmd->add_option("--format", o->format,
+                  "vtk (default): RUN/vtk/*.vtu and RUN/particles.pvd; mdanalysis: RUN/mdanalysis/trajectory.h5md, "
+                  "which mda.Universe() opens as it is (Angstrom = 1e-8 cm, Angstrom/ps, s; z = 0 in 2-D)")
+      ->check(CLI::IsMember({"vtk", "mdanalysis"}));
   cmd->add_option("--every", o->every, "Write every K-th frame (the last always)")->check(CLI::PositiveNumber);
   std::string names;
   for (const auto& f : analysis::export_fields()) names += (names.empty() ? "" : ", ") + f;
-  cmd->add_option("--fields", o->fields, "Comma-separated arrays to write (default all): " + names)->type_name("A,B,...");
-  cmd->add_option("--break", o->criterion,
+  o->fields_opt = cmd->add_option("--fields", o->fields, "Comma-separated arrays to write (default all): " + names)->type_name("A,B,...");
+  o->break_opt = cmd->add_option("--break", o->criterion,
                   "Read broken bonds from their lengths at the frames: longer than D, rd, or a factor of r0 (default: "
                   "the engine's record of the bonds it broke)")
       ->type_name("D|rd|FACTOR");
-  cmd->add_option("--compress", o->compress,
+  o->compress_opt = cmd->add_option("--compress", o->compress,
                   "Compression of the VTU data: lz4 (default, fastest to write), zlib (about 25 % smaller), none")
       ->check(CLI::IsMember({"lz4", "zlib", "none"}));
   cmd->callback([o] { run(*o); });

@@ -73,9 +73,10 @@ void run(const RunCli& o) {
     std::printf("%s\n", r.message.c_str());
     return;
   }
-  std::printf("%s: %ld steps, %ld frames, %zu particles in %.3g s (%.3g particle-steps/s, %d threads, %s kernels, %s)\n",
+  std::printf("%s: %ld steps, %ld frames, %zu particles in %.3g s (%.3g particle-steps/s, %d threads, %s kernels, %s; "
+              "%.3g s of setup before)\n",
               r.completed ? "finished" : "STOPPED", r.steps, r.frames, r.particles, r.wall_s, r.particle_steps_per_s(),
-              r.threads(), kernel_path(), processor_name().c_str());
+              r.threads(), kernel_path(), processor_name().c_str(), r.setup_s);
   // What happened to the bonds, in the words of the model that ran.
   if (r.pair_model == "cutoff") {
     if (r.bonds_broken > 0)

@@ -400,6 +400,57 @@ void sweep_figures(const std::string& dir, const std::string& prefix) {
   std::printf("wrote %s from %zu completed cases (%ld not completed, left out)\n", list.c_str(), rows.size(), skipped);
 }
 
+// `pmfrag study scale-figures SCALE_CSV`: what bench/scale.sh measured, as log-log charts against the particle
+// count, one curve per dimension: the wall time per particle-step (flat = cost in proportion to N) and the peak
+// resident bytes per particle.
+void scale_figures(const std::string& csv_path, const std::string& prefix) {
+  std::ifstream in(csv_path);
+  if (!in) throw UsageError(csv_path + ": not found (run bench/scale.sh first)");
+  std::string header;
+  std::getline(in, header);
+  const std::vector<std::string> names = csv_cells(header);
+  auto column = [&](const std::string& name) {
+    const auto it = std::find(names.begin(), names.end(), name);
+    if (it == names.end()) throw std::runtime_error(csv_path + ": no column '" + name + "'");
+    return static_cast<std::size_t>(it - names.begin());
+  };
+  const std::size_t cDim = column("dim"), cN = column("particles"), cNs = column("ns_per_particle_step"),
+                    cRss = column("peak_rss_bytes_per_particle"), cProc = column("processor");
+  std::map<std::string, render::Series> cost, memory;
+  std::string processor;
+  long line_no = 1;
+  for (std::string line; std::getline(in, line);) {
+    ++line_no;
+    if (line.empty()) continue;
+    const auto cells = csv_cells(line);
+    if (cells.size() != names.size())
+      throw std::runtime_error(csv_path + ":" + std::to_string(line_no) + ": " + std::to_string(cells.size()) +
+                               " cells, the header has " + std::to_string(names.size()));
+    const std::string name = cells[cDim] + "-D";
+    const double n = cell_number(cells[cN]);
+    cost[name].name = name, memory[name].name = name;
+    cost[name].x.push_back(n), cost[name].y.push_back(cell_number(cells[cNs]));
+    memory[name].x.push_back(n), memory[name].y.push_back(cell_number(cells[cRss]));
+    processor = cells[cProc];
+  }
+  if (cost.empty()) throw std::runtime_error(csv_path + ": no rows");
+  auto draw = [&](const std::map<std::string, render::Series>& by_dim, const std::string& title,
+                  const std::string& y_label, const std::string& suffix) {
+    render::ChartSpec chart;
+    chart.title = title + " (" + processor + ")";
+    chart.x_label = "particles";
+    chart.y_label = y_label;
+    chart.log_x = chart.log_y = true;
+    for (const auto& [name, series] : by_dim) chart.series.push_back(series);
+    render::HeadlessWindow window(1000, 700);
+    render::render_chart_png(window, chart, 1000, 700, prefix + suffix);
+    return prefix + suffix;
+  };
+  const std::string a = draw(cost, "Wall time per particle-step against size", "ns per particle-step", "_cost.png");
+  const std::string b = draw(memory, "Peak resident memory per particle against size", "bytes per particle", "_memory.png");
+  std::printf("wrote %s and %s\n", a.c_str(), b.c_str());
+}
+
 }  // namespace
 
 void add_study_command(CLI::App& app) {
@@ -423,6 +474,15 @@ void add_study_command(CLI::App& app) {
   fig->add_option("sweep_dir", dir->first, "Folder holding sweep.csv")->required();
   fig->add_option("--prefix", dir->second, "PNG path prefix (default SWEEP_DIR/sweep): PREFIX_times.png, PREFIX_fragments.png, or over impact speeds PREFIX_{pieces,largest,tau,nm}.png");
   fig->callback([dir] { sweep_figures(dir->first, dir->second.empty() ? dir->first + "/sweep" : dir->second); });
+  auto scale = std::make_shared<std::pair<std::string, std::string>>();
+  auto* sc = study->add_subcommand("scale-figures", "Charts of bench/scale.sh's table: ns per particle-step and peak bytes per particle against N");
+  sc->add_option("scale_csv", scale->first, "The table bench/scale.sh wrote (gallery/scale.csv)")->required();
+  sc->add_option("--prefix", scale->second, "PNG path prefix (default: the CSV's path without .csv): PREFIX_cost.png, PREFIX_memory.png");
+  sc->callback([scale] {
+    std::string prefix = scale->second;
+    if (prefix.empty()) prefix = (fs::path(scale->first).parent_path() / fs::path(scale->first).stem()).string();
+    scale_figures(scale->first, prefix);
+  });
   add_study_figures_command(*study);
   add_study_modulus_command(*study);
 }

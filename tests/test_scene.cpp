@@ -282,6 +282,8 @@ TEST(RunRecord, ReadsBackWhatTheRunWrote) {
   EXPECT_EQ(back.dt, ran.dt);  // doubles are written to round-trip exactly
   EXPECT_EQ(back.dt_min, ran.dt_min);
   EXPECT_EQ(back.wall_s, ran.wall_s);
+  EXPECT_EQ(back.setup_s, ran.setup_s);
+  EXPECT_GT(ran.setup_s, 0.0);  // the system and lists take time to build before the first frame
   EXPECT_EQ(back.pair_model, ran.pair_model);
   EXPECT_EQ(back.first_break_time, ran.first_break_time);
   EXPECT_EQ(back.threads(), ran.threads());

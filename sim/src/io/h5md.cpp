@@ -35,12 +35,21 @@ hid_t checked(hid_t id, const char* what) {
 
 hid_t make_group(hid_t parent, const char* name) { return checked(H5Gcreate2(parent, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name); }
 
-void string_attribute(hid_t obj, const char* name, const std::string& value) {
+// Text attributes are variable-length UTF-8, as the H5MD reference writers store them: h5py reads them as
+// str, and MDAnalysis' unit parser compares them with its own names (fixed-length bytes it reads as b'...').
+hid_t utf8_text_type() {
   hid_t type = H5Tcopy(H5T_C_S1);
-  H5Tset_size(type, value.empty() ? 1 : value.size());
+  H5Tset_size(type, H5T_VARIABLE);
+  H5Tset_cset(type, H5T_CSET_UTF8);
+  return type;
+}
+
+void string_attribute(hid_t obj, const char* name, const std::string& value) {
+  hid_t type = utf8_text_type();
   hid_t space = H5Screate(H5S_SCALAR);
   hid_t a = checked(H5Acreate2(obj, name, type, space, H5P_DEFAULT, H5P_DEFAULT), name);
-  check(H5Awrite(a, type, value.c_str()), name);
+  const char* text = value.c_str();
+  check(H5Awrite(a, type, &text), name);
   H5Aclose(a), H5Sclose(space), H5Tclose(type);
 }
 
@@ -244,13 +253,11 @@ H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& 
   int_array_attribute(box, "dimension", {sys.dim});
   {
     // boundary: "none" per dimension (the body is free in space)
-    hid_t type = H5Tcopy(H5T_C_S1);
-    H5Tset_size(type, 4);
+    hid_t type = utf8_text_type();
     hsize_t d[1] = {dim};
     hid_t space = H5Screate_simple(1, d, nullptr);
-    hid_t a = H5Acreate2(box, "boundary", type, space, H5P_DEFAULT, H5P_DEFAULT);
-    std::string none(4 * dim, '\0');
-    for (hsize_t k = 0; k < dim; ++k) none.replace(4 * k, 4, "none");
+    hid_t a = checked(H5Acreate2(box, "boundary", type, space, H5P_DEFAULT, H5P_DEFAULT), "boundary");
+    const std::vector<const char*> none(dim, "none");
     check(H5Awrite(a, type, none.data()), "boundary");
     H5Aclose(a), H5Sclose(space), H5Tclose(type);
   }

@@ -159,6 +159,7 @@ void write_run_record(const std::filesystem::path& dir, const RunResult& res, lo
       {"dt_adaptive", res.adaptive},
       {"dt_min_s", res.dt_min},
       {"dt_limit_s", res.dt_limit},
+      {"setup_s", res.setup_s},
       {"wall_s", res.wall_s},
       {"particle_steps_per_s", res.particle_steps_per_s()},
       {"threads", res.threads()},
@@ -207,7 +208,7 @@ class ProgressReport {
 
 template <int D>
 RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, const StepChoice& choice,
-                  const Checkpoint* from) {
+                  const Checkpoint* from, std::chrono::steady_clock::time_point started) {
   const double dt = choice.dt, limit = choice.limit;  // adaptive: dt is the cap
   const bool adaptive = choice.adaptive;
   RunResult res;
@@ -237,6 +238,7 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
   StepLevels levels(dt, at.every_s);
   if (from) levels.restore(from->level, from->calm);
   ProgressReport progress(opt);
+  res.setup_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   auto done = [&] { return adaptive ? !(lf.state().t < at.end - at.tol) : lf.state().step >= at.steps; };
   double dt_min_taken = dt;
   try {
@@ -343,6 +345,7 @@ RunResult read_run_record(const std::string& path) {
   r.dt_min = number(j, "dt_min_s", 0.0);
   r.dt_limit = number(j, "dt_limit_s", 0.0);
   r.wall_s = number(j, "wall_s", 0.0);
+  r.setup_s = number(j, "setup_s", 0.0);
   r.first_break_time = number(j, "first_break_time_s", -1.0);
   r.list_builds = static_cast<long>(number(j, "neighbour_list_builds", 0.0));
   if (j.contains("bond_events") && j["bond_events"].is_object()) {
@@ -364,7 +367,8 @@ RunResult read_run_record(const std::string& path) {
 
 namespace {
 // A new run, its step checked; `take_lock`: false if the caller already holds the folder's lock.
-RunResult start_run(const Scene& scene, const RunOptions& opt, bool take_lock) {
+RunResult start_run(const Scene& scene, const RunOptions& opt, bool take_lock,
+                    std::chrono::steady_clock::time_point started = std::chrono::steady_clock::now()) {
   const System sys = build_system(scene);
   const StepChoice choice = choose_step(scene, sys);
   const double limit = choice.limit, dt = choice.dt;
@@ -387,14 +391,15 @@ RunResult start_run(const Scene& scene, const RunOptions& opt, bool take_lock) {
   if (scene.time.end < dt) throw SceneError(scene.file + ": time.end is shorter than one step");
   std::optional<FolderLock> lock;
   if (take_lock) lock.emplace(opt.out_dir);  // one writer per run folder (folder_lock.hpp)
-  if (scene.dim == 2) return run_dim<2>(scene, sys, opt, choice, nullptr);
-  return run_dim<3>(scene, sys, opt, choice, nullptr);
+  if (scene.dim == 2) return run_dim<2>(scene, sys, opt, choice, nullptr, started);
+  return run_dim<3>(scene, sys, opt, choice, nullptr, started);
 }
 }  // namespace
 
 RunResult run_scene(const Scene& scene, const RunOptions& opt) { return start_run(scene, opt, true); }
 
 RunResult resume_run(const RunOptions& opt) {
+  const auto started = std::chrono::steady_clock::now();
   namespace fs = std::filesystem;
   const fs::path dir(opt.out_dir);
   const fs::path traj = dir / "trajectory.h5", ckpt = dir / "checkpoint.h5", info = dir / "run.json";
@@ -426,13 +431,13 @@ RunResult resume_run(const RunOptions& opt) {
   if (!fs::exists(ckpt)) {
     if (o.log) o.log("no checkpoint in " + dir.string() + ": starting over");
     o.force = true;
-    return start_run(scene, o, false);
+    return start_run(scene, o, false, started);
   }
   const Checkpoint c = read_checkpoint(ckpt.string());
   const System sys = build_system(scene);
   const StepChoice choice = choose_step(scene, sys);
-  if (scene.dim == 2) return run_dim<2>(scene, sys, o, choice, &c);
-  return run_dim<3>(scene, sys, o, choice, &c);
+  if (scene.dim == 2) return run_dim<2>(scene, sys, o, choice, &c, started);
+  return run_dim<3>(scene, sys, o, choice, &c, started);
 }
 
 }  // namespace pmfrag

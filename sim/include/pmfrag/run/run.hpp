@@ -29,7 +29,8 @@ struct RunOptions {
 struct RunResult {
   long steps = 0, frames = 0;
   std::size_t particles = 0;
-  double dt = 0.0, dt_limit = 0.0, wall_s = 0.0;
+  double dt = 0.0, dt_limit = 0.0, wall_s = 0.0;  ///< wall_s: the steps, from the first frame on
+  double setup_s = 0.0;  ///< s of wall time before the first frame: system, step limit, effects, lists, files
   std::string pair_model = "none";  ///< "bonded", "cutoff" or "none"
   double first_break_time = -1.0;  ///< s; -1 if no bond broke (cutoff model: no pair of the lattice left D)
   long bonds_broken = 0;      ///< bonded: bonds broken; cutoff: times a pair of the lattice left D (whole run)
