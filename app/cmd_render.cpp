@@ -204,6 +204,12 @@ void run(const RenderCli& o) {
       break;
     }
     if (title.empty()) title = o.dir;
+    // What ran is the scene file with its overrides: a title quoting "200 cm/s" must say that --set changed it.
+    const std::vector<std::string> overrides = rd.overrides();
+    if (!overrides.empty()) {
+      title += "\n--set ";
+      for (std::size_t k = 0; k < overrides.size(); ++k) title += (k ? ", " : "") + overrides[k];
+    }
   }
 
   render::HeadlessWindow window(o.size, o.size);

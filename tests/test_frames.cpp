@@ -159,3 +159,26 @@ TEST(Frames, FieldsWithoutPositionOrUnknownAreRefusedNamingTheKey) {
     }
   }
 }
+
+// The trajectory keeps the overrides a run was made with, in order, for what is drawn and said of it
+// (render's titles state them).
+TEST(Frames, TheTrajectoryGivesBackTheOverridesThatRan) {
+  const fs::path d = plate_run("frames_overrides", {"kinematic.0.velocity=[0.0, 40.0]"});
+  H5mdReader rd((d / "trajectory.h5").string());
+  const std::vector<std::string> expected{"time.end=3e-3", "time.dt=2e-7", "output.every=2e-4",
+                                          "kinematic.0.velocity=[0.0, 40.0]"};
+  EXPECT_EQ(rd.overrides(), expected);
+  fs::remove_all(d);
+}
+
+// The bond record names the model its events belong to; a cutoff run's re-formed events are legal only if it
+// reads back as "cutoff" (text attributes are UTF-8: the reader must ask for that character set).
+TEST(Frames, TheBondRecordNamesItsModel) {
+  for (const std::string model : {"bonded", "cutoff"}) {
+    const fs::path d = plate_run("frames_model_" + model, {"pair.model=\"" + model + "\""});
+    H5mdReader rd((d / "trajectory.h5").string());
+    ASSERT_TRUE(rd.has_bond_record());
+    EXPECT_EQ(rd.bond_record().model, model);
+    fs::remove_all(d);
+  }
+}

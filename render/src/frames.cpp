@@ -129,7 +129,10 @@ void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, co
                 PngQueue* queue) {
   vtkGenericOpenGLRenderWindow* win = hw.window();
   const int count = static_cast<int>(pics.size());
-  const int title_h = title.empty() ? 0 : std::max(40, panel_h / 14);
+  // A title line is 1/14 of the panel; further lines (the overrides that ran) take 3/5 of one each.
+  const int title_line_h = std::max(40, panel_h / 14);
+  const int title_lines = 1 + static_cast<int>(std::count(title.begin(), title.end(), '\n'));
+  const int title_h = title.empty() ? 0 : title_line_h + (title_lines - 1) * title_line_h * 3 / 5;
   const int legend_w = std::max(90, panel_w / 4);  // the colour bar gets its own column
   const int width = panel_w * count + legend_w, height = panel_h + title_h;
   const double panels_right = static_cast<double>(panel_w * count) / width;
@@ -283,11 +286,11 @@ void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, co
     ren->SetBackground(1.0, 1.0, 1.0);
     vtkNew<vtkTextActor> t;
     t->SetInput(title.c_str());
-    t->GetTextProperty()->SetFontSize(title_h / 2);
+    t->GetTextProperty()->SetFontSize(title_line_h / 2);
     t->GetTextProperty()->SetColor(0.1, 0.1, 0.1);
     t->GetTextProperty()->BoldOn();
     t->GetPositionCoordinate()->SetCoordinateSystemToViewport();
-    t->GetPositionCoordinate()->SetValue(14, title_h / 4);
+    t->GetPositionCoordinate()->SetValue(14, title_line_h / 4);
     ren->AddActor2D(t);
     win->AddRenderer(ren);
     keep.push_back(ren);

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <cerrno>
 #include <stdexcept>
 
@@ -668,8 +669,10 @@ std::string string_attribute_of(hid_t obj, const char* name) {
   std::string out;
   if (H5Tis_variable_str(type) > 0) {
     char* text = nullptr;
+    // HDF5 converts no character set into another: the memory type takes the file's (ASCII or UTF-8)
     hid_t mem = H5Tcopy(H5T_C_S1);
     H5Tset_size(mem, H5T_VARIABLE);
+    H5Tset_cset(mem, H5Tget_cset(type));
     if (H5Aread(a, mem, &text) >= 0 && text) out = text;
     if (text) H5free_memory(text);
     H5Tclose(mem);
@@ -776,6 +779,15 @@ std::string read_string(hid_t file, const char* path) {
 }  // namespace
 
 std::string H5mdReader::scene_text() const { return read_string(file_, "/parameters/scene"); }
+
+std::vector<std::string> H5mdReader::overrides() const {
+  if (H5Lexists(file_, "/parameters/overrides", H5P_DEFAULT) <= 0) return {};
+  std::vector<std::string> out;
+  std::stringstream lines(read_string(file_, "/parameters/overrides"));
+  for (std::string line; std::getline(lines, line);)
+    if (!line.empty()) out.push_back(line);
+  return out;
+}
 std::string H5mdReader::incomplete() const {
   return H5Lexists(file_, "/parameters/incomplete", H5P_DEFAULT) > 0 ? read_string(file_, "/parameters/incomplete") : "";
 }

@@ -115,6 +115,8 @@ class H5mdReader {
   std::vector<PairLaw> laws() const;
   std::vector<int> phase_pair_law() const;
   std::string scene_text() const;
+  /// The `--set KEY=VALUE` overrides the run was made with, in order (none in trajectories without the record).
+  std::vector<std::string> overrides() const;
   /// Why the run ended before its end time ("" if it did not, or has been resumed to the end).
   std::string incomplete() const;
 
