@@ -284,6 +284,9 @@ TEST(RunRecord, ReadsBackWhatTheRunWrote) {
   EXPECT_EQ(back.wall_s, ran.wall_s);
   EXPECT_EQ(back.setup_s, ran.setup_s);
   EXPECT_GT(ran.setup_s, 0.0);  // the system and lists take time to build before the first frame
+  EXPECT_EQ(back.output_s, ran.output_s);
+  EXPECT_GT(ran.output_s, 0.0);  // frames were written...
+  EXPECT_LT(ran.output_s, ran.wall_s);  // ...within the run's wall time
   EXPECT_EQ(back.pair_model, ran.pair_model);
   EXPECT_EQ(back.first_break_time, ran.first_break_time);
   EXPECT_EQ(back.threads(), ran.threads());

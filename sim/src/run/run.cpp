@@ -161,6 +161,7 @@ void write_run_record(const std::filesystem::path& dir, const RunResult& res, lo
       {"dt_limit_s", res.dt_limit},
       {"setup_s", res.setup_s},
       {"wall_s", res.wall_s},
+      {"output_s", res.output_s},
       {"particle_steps_per_s", res.particle_steps_per_s()},
       {"threads", res.threads()},
       {"kernels", kernel_path()},
@@ -242,7 +243,13 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
   auto done = [&] { return adaptive ? !(lf.state().t < at.end - at.tol) : lf.state().step >= at.steps; };
   double dt_min_taken = dt;
   try {
-    if (!from) out.frame();
+    // Frames and checkpoints timed apart, so that the steps' own cost can be read from run.json at any size
+    const auto timed = [&res](auto&& write) {
+      const auto t0 = std::chrono::steady_clock::now();
+      write();
+      res.output_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    };
+    if (!from) timed([&] { out.frame(); });
     while (!done()) {
       bool frame_due = false, take_checkpoint = false;
       if (adaptive) {
@@ -282,11 +289,11 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
       // At a checkpoint step the lists are rebuilt first, in an uninterrupted run as in a resumed one, so
       // both continue bitwise alike.
       if (take_checkpoint) lf.canonicalize();
-      if (frame_due) out.frame();
-      if (take_checkpoint) out.checkpoint(levels);
+      if (frame_due) timed([&] { out.frame(); });
+      if (take_checkpoint) timed([&] { out.checkpoint(levels); });
       if (stop_requested && !done()) {
         // Interrupted: keep the frames written and checkpoint this step so --resume continues from here.
-        out.checkpoint(levels);
+        timed([&] { out.checkpoint(levels); });
         res.interrupted = true;
         res.message = "interrupted at step " + std::to_string(k) + " (t = " + fmt("%.6g", lf.state().time()) +
                       " s); continue with: pmfrag run --resume " + opt.out_dir;
@@ -346,6 +353,7 @@ RunResult read_run_record(const std::string& path) {
   r.dt_limit = number(j, "dt_limit_s", 0.0);
   r.wall_s = number(j, "wall_s", 0.0);
   r.setup_s = number(j, "setup_s", 0.0);
+  r.output_s = number(j, "output_s", 0.0);
   r.first_break_time = number(j, "first_break_time_s", -1.0);
   r.list_builds = static_cast<long>(number(j, "neighbour_list_builds", 0.0));
   if (j.contains("bond_events") && j["bond_events"].is_object()) {

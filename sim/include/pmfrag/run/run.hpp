@@ -31,6 +31,7 @@ struct RunResult {
   std::size_t particles = 0;
   double dt = 0.0, dt_limit = 0.0, wall_s = 0.0;  ///< wall_s: the steps, from the first frame on
   double setup_s = 0.0;  ///< s of wall time before the first frame: system, step limit, effects, lists, files
+  double output_s = 0.0;  ///< s of wall_s spent writing frames and checkpoints (wall_s - output_s: the steps alone)
   std::string pair_model = "none";  ///< "bonded", "cutoff" or "none"
   double first_break_time = -1.0;  ///< s; -1 if no bond broke (cutoff model: no pair of the lattice left D)
   long bonds_broken = 0;      ///< bonded: bonds broken; cutoff: times a pair of the lattice left D (whole run)
