@@ -3,11 +3,11 @@
 # and the 3-D block (cases/block3d_slit.toml) from 55k to 3.5M, the same bodies at finer r0, dt scaled with r0
 # (5e-7 s/cm x r0: a third of the stability limit), quiet steps only (every run ends long before the first
 # broken bond). For each size: particle-steps/s on all cores and on one (of the steps alone: see steps_rate),
-# the thread count the engine chose, the wall time per particle-step, peak resident memory per particle (/usr/bin/time), and the setup before the first frame
-# (run.json setup_s). Then pmfrag against LAMMPS (Debian's lmp, 2 threads against 2 ranks) on the 3-D block at
+# the thread count the engine chose, the wall time per particle-step, peak resident memory per particle
+# (/usr/bin/time), and the setup before the first frame (run.json setup_s). Then pmfrag against LAMMPS (Debian's lmp, 2 threads against 2 ranks) on the 3-D block at
 # 439,520 particles, alternated pairs. Writes gallery/scale.csv and its charts (gallery/scale_cost.png,
 # gallery/scale_memory.png).
-#   bash bench/scale.sh              # ~20 min on 2 cores, ~2.5 GB of memory at the largest size
+#   bash bench/scale.sh              # ~15 min on 2 cores (AMD EPYC Zen 5, 2026-12-04), ~2.5 GB of memory at the largest size
 #   QUICK=1 bash bench/scale.sh      # sizes up to ~700k only, output in build/bench-scale (not gallery/)
 set -euo pipefail
 cd "$(dirname "$0")/.."
