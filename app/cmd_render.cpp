@@ -2,6 +2,7 @@
 
 #include "movie.hpp"
 #include "parse.hpp"
+#include "pmfrag/io/atomic_file.hpp"
 #include "pmfrag/io/folder_lock.hpp"
 #include "pmfrag/analysis/fragments.hpp"
 #include "pmfrag/analysis/particle_fields.hpp"
@@ -214,18 +215,17 @@ void run(const RenderCli& o) {
 
   render::HeadlessWindow window(o.size, o.size);
   const fs::path frames_dir = dir / "frames";
+  // The sequence is drawn into frames.part/ and takes the place of frames/ once every frame is on disk: a render
+  // that fails or is killed leaves the previous frames as they were, and an earlier render's frames (another
+  // --every) never mix into the movie.
+  const fs::path staged_dir = dir / "frames.part";
   if (!o.no_frames) {
-    fs::create_directories(frames_dir);
-    // frames/ holds one sequence: an earlier render's frames (another --every) would mix into the movie.
-    for (const auto& e : fs::directory_iterator(frames_dir)) {
-      const std::string name = e.path().filename().string();
-      if (name.rfind("frame_", 0) == 0 && e.path().extension() == ".png") fs::remove(e.path());
-    }
-    const fs::path note = frames_dir / "PARTIAL.txt";
-    if (damage.empty())
-      fs::remove(note);
-    else
-      std::ofstream(note) << "frames 0.." << frames - 1 << " of a damaged trajectory: " << damage << "\n";
+    fs::remove_all(staged_dir);  // what a killed render left
+    fs::create_directories(staged_dir);
+    if (!damage.empty())
+      write_file_atomically(staged_dir / "PARTIAL.txt", [&](std::ostream& note) {
+        note << "frames 0.." << frames - 1 << " of a damaged trajectory: " << damage << "\n";
+      });
   }
   std::vector<long> panel_frames;
   for (double a : panel_at) {
@@ -243,6 +243,20 @@ void run(const RenderCli& o) {
   overlay.vector_scale = o.vectors;
   const auto t0 = std::chrono::steady_clock::now();
   long rendered = 0;
+  // A render that fails takes its unfinished frames with it (declared before the queue, so that it runs after
+  // the queue's thread has stopped writing).
+  struct RemoveUnlessDone {
+    fs::path dir;
+    bool done = false;
+    ~RemoveUnlessDone() {
+      std::error_code ec;
+      if (!done && !dir.empty()) fs::remove_all(dir, ec);
+    }
+  } unfinished{o.no_frames ? fs::path() : staged_dir};
+  const auto frames_not_written = [&](const std::runtime_error& e) {
+    return std::runtime_error(frames_dir.string() + ": the new frames were not written, the previous ones are kept: " +
+                              e.what());
+  };
   render::PngQueue png_queue;  // frames are encoded while the next one renders
   for (long k = 0; k < frames; ++k) {
     rd.frame(k, f);
@@ -259,13 +273,23 @@ void run(const RenderCli& o) {
     if (want_frame) {
       char name[32];
       std::snprintf(name, sizeof name, "frame_%05ld.png", k);
-      render::render_png(window, view, spec, {pic}, "", o.size, o.size, (frames_dir / name).string(), 1, &png_queue);
+      try {
+        render::render_png(window, view, spec, {pic}, "", o.size, o.size, (staged_dir / name).string(), 1, &png_queue);
+      } catch (const std::runtime_error& e) {
+        throw frames_not_written(e);
+      }
       ++rendered;
     }
     for (std::size_t j = 0; j < panel_frames.size(); ++j)
       if (panel_frames[j] == k) panel[j] = pic;
   }
-  png_queue.finish();
+  try {
+    png_queue.finish();
+  } catch (const std::runtime_error& e) {
+    throw frames_not_written(e);
+  }
+  if (!o.no_frames) replace_directory(frames_dir, staged_dir);
+  unfinished.done = true;
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!o.no_frames)
     std::printf("rendered %ld frames to %s (%.1f frames/s incl. PNG)\n", rendered, frames_dir.c_str(), rendered / secs);

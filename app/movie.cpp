@@ -1,16 +1,30 @@
 #include "movie.hpp"
 
 #include "process.hpp"
+#include "pmfrag/io/atomic_file.hpp"
 
 #include <sys/wait.h>
 
 #include <cstdio>
+#include <cstring>
+#include <fstream>
 #include <stdexcept>
 #include <vector>
 
 namespace pmfrag::app {
 
 namespace fs = std::filesystem;
+
+namespace {
+// ffmpeg's own reason, the last line of its log (e.g. "Error writing trailer of ...: No space left on device").
+std::string last_line(const fs::path& log) {
+  std::ifstream in(log);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (!line.empty()) last = line;
+  return last.empty() ? "exited with an error and no message" : last;
+}
+}  // namespace
 
 void encode_movie(const fs::path& frames_dir, const fs::path& out_dir, double fps) {
   const std::string ffmpeg = find_on_path("ffmpeg");
@@ -37,18 +51,26 @@ void encode_movie(const fs::path& frames_dir, const fs::path& out_dir, double fp
         "-f", "gif"}},
   };
   for (const auto& out : outputs) {
-    const fs::path file = out_dir / out.name, tmp = out_dir / (out.name + ".tmp");
-    std::vector<std::string> args{"ffmpeg"};
-    args.insert(args.end(), input.begin(), input.end());
-    args.insert(args.end(), out.args.begin(), out.args.end());
-    args.push_back(tmp.string());
-    const pid_t pid = start_process(ffmpeg, args, log);
-    int status = 0;
-    if (::waitpid(pid, &status, 0) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-      fs::remove(tmp);
-      throw std::runtime_error("ffmpeg failed to write " + file.string() + " (see " + log.string() + ")");
+    const fs::path file = out_dir / out.name;
+    std::string why;
+    try {
+      // Whole or absent: ffmpeg writes a temporary file, renamed over the old movie only once it succeeded.
+      write_file_atomically_by_name(file, [&](const fs::path& tmp) {
+        std::vector<std::string> args{"ffmpeg"};
+        args.insert(args.end(), input.begin(), input.end());
+        args.insert(args.end(), out.args.begin(), out.args.end());
+        args.push_back(tmp.string());
+        const pid_t pid = start_process(ffmpeg, args, log);
+        int status = 0;
+        if (::waitpid(pid, &status, 0) == pid && WIFEXITED(status) && WEXITSTATUS(status) == 0) return true;
+        why = WIFSIGNALED(status) ? std::string("killed by ") + strsignal(WTERMSIG(status)) : last_line(log);
+        return false;
+      });
+    } catch (const std::runtime_error& e) {
+      if (why.empty()) throw;  // ffmpeg succeeded; the flush or the rename failed, and the message says why
+      throw std::runtime_error(file.string() + ": cannot write: ffmpeg: " + why + " (the previous file is unchanged; " +
+                               "its log is " + log.string() + ")");
     }
-    fs::rename(tmp, file);
   }
   fs::remove(log);
 }

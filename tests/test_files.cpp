@@ -91,3 +91,42 @@ TEST(AtomicFile, AMissingFolderOrAFailingBodyWritesNothing) {
   EXPECT_TRUE(only_file_in(d, "sweep.csv"));
   fs::remove_all(d);
 }
+
+TEST(AtomicFile, AWriterByNameThatThrowsLeavesNoTemporary) {
+  const fs::path d = fresh_dir("byname"), f = d / "crack.mp4";
+  write_file_atomically(f, std::string_view("old movie"));
+  EXPECT_THROW(write_file_atomically_by_name(f, [](const fs::path& tmp) -> bool {
+                 std::ofstream(tmp) << "half a movie";
+                 throw std::runtime_error("the encoder failed");
+               }),
+               std::runtime_error);
+  EXPECT_EQ(content(f), "old movie");
+  EXPECT_TRUE(only_file_in(d, "crack.mp4")) << "a temporary file was left behind";
+  fs::remove_all(d);
+}
+
+TEST(ReplaceDirectory, TheStagedFolderTakesThePlaceOfTheOldOneWhole) {
+  const fs::path d = fresh_dir("replace_dir"), frames = d / "frames", staged = d / "frames.part";
+  // First render: no frames/ yet.
+  fs::create_directories(staged);
+  write_file_atomically(staged / "frame_00000.png", std::string_view("a0"));
+  replace_directory(frames, staged);
+  EXPECT_EQ(content(frames / "frame_00000.png"), "a0");
+  EXPECT_FALSE(fs::exists(staged));
+  // A second render of other frames replaces the first one's entirely: nothing of it is left to mix in.
+  fs::create_directories(staged);
+  write_file_atomically(staged / "frame_00005.png", std::string_view("b5"));
+  replace_directory(frames, staged);
+  EXPECT_TRUE(only_file_in(frames, "frame_00005.png"));
+  EXPECT_EQ(content(frames / "frame_00005.png"), "b5");
+  EXPECT_TRUE(only_file_in(d, "frames")) << "the previous frames or the staged folder were left behind";
+  // A staged folder that is missing is an error naming the folder; the frames stay.
+  try {
+    replace_directory(frames, staged);
+    ADD_FAILURE() << "replaced the frames with a folder that does not exist";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(frames.string()), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(content(frames / "frame_00005.png"), "b5");
+  fs::remove_all(d);
+}

@@ -1,5 +1,6 @@
 #include "png.hpp"
 
+#include "pmfrag/io/atomic_file.hpp"
 #include "pmfrag/render/png_queue.hpp"
 
 #include <vtkImageData.h>
@@ -11,13 +12,21 @@
 #include <png.h>
 #include <zlib.h>
 
-#include <cstdio>
-#include <filesystem>
 #include <stdexcept>
+#include <string>
 
 namespace pmfrag::render {
 
 namespace {
+
+// libpng's output callback: the encoded bytes go to a string (no C++ exception may cross libpng's C frames).
+void append_bytes(png_structp png, png_bytep data, png_size_t size) {
+  try {
+    static_cast<std::string*>(png_get_io_ptr(png))->append(reinterpret_cast<const char*>(data), size);
+  } catch (...) {
+    png_error(png, "out of memory");
+  }
+}
 
 // libpng directly rather than vtkPNGWriter: the picture is flat colours, so the SUB filter with zlib's RLE
 // strategy compresses nearly as well as libpng's adaptive filtering with deflate, at a fraction of the time
@@ -29,15 +38,14 @@ void write_png(vtkImageData* image, const std::string& png_path, int compression
   if (image->GetScalarType() != VTK_UNSIGNED_CHAR || (comps != 3 && comps != 4))
     throw std::runtime_error(png_path + ": expected 8-bit RGB pixels");
   const auto* pixels = static_cast<const unsigned char*>(image->GetScalarPointer());
-  const std::string tmp = png_path + ".tmp.png";
-  std::FILE* file = std::fopen(tmp.c_str(), "wb");
-  if (!file) throw std::runtime_error(png_path + ": cannot open for writing");
+  // Encoded in memory, then written whole or not at all (a full disk leaves the previous frame, and says why).
+  std::string encoded;
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   // volatile: it is read after a longjmp back into this frame
   volatile bool ok = png && info;
   if (ok && setjmp(png_jmpbuf(png)) == 0) {
-    png_init_io(png, file);
+    png_set_write_fn(png, &encoded, append_bytes, nullptr);
     png_set_IHDR(png, info, static_cast<png_uint_32>(w), static_cast<png_uint_32>(h), 8,
                  comps == 4 ? PNG_COLOR_TYPE_RGB_ALPHA : PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                  PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
@@ -53,12 +61,8 @@ void write_png(vtkImageData* image, const std::string& png_path, int compression
     ok = false;
   }
   png_destroy_write_struct(png ? &png : nullptr, info ? &info : nullptr);
-  if (std::fclose(file) != 0) ok = false;
-  if (!ok) {
-    std::filesystem::remove(tmp);
-    throw std::runtime_error(png_path + ": PNG writer failed");
-  }
-  std::filesystem::rename(tmp, png_path);
+  if (!ok) throw std::runtime_error(png_path + ": cannot encode the PNG");
+  write_file_atomically(png_path, encoded);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "pmfrag/io/atomic_file.hpp"
 
 #include <fcntl.h>
+#include <stdio.h>  // renameat2
 #include <unistd.h>
 
 #include <cerrno>
@@ -41,7 +42,10 @@ void commit(const fs::path& path, const fs::path& tmp) {
 void write_file_atomically(const fs::path& path, const std::function<void(std::ostream&)>& body) {
   std::ostringstream text;
   body(text);  // a body that throws leaves nothing behind: no file was opened yet
-  const std::string bytes = text.str();
+  write_file_atomically(path, std::string_view(text.view()));
+}
+
+void write_file_atomically(const fs::path& path, std::string_view bytes) {
   const fs::path tmp = temporary_for(path);
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) fail(path, tmp, errno);
@@ -67,8 +71,40 @@ void write_file_atomically(const fs::path& path, const std::function<void(std::o
 void write_file_atomically_by_name(const fs::path& path, const std::function<bool(const fs::path& tmp)>& write) {
   const fs::path tmp = temporary_for(path);
   errno = 0;
-  if (!write(tmp)) fail(path, tmp, errno != 0 ? errno : EIO);
+  bool written = false;
+  try {
+    written = write(tmp);
+  } catch (...) {
+    ::unlink(tmp.c_str());
+    throw;
+  }
+  if (!written) fail(path, tmp, errno != 0 ? errno : EIO);
   commit(path, tmp);
+}
+
+void replace_directory(const fs::path& dir, const fs::path& staged) {
+  const auto fail_dir = [&](int error) {
+    throw std::runtime_error(dir.string() + ": cannot replace with " + staged.string() + ": " + std::strerror(error));
+  };
+  std::error_code ec;
+  if (!fs::exists(dir, ec)) {
+    if (::rename(staged.c_str(), dir.c_str()) != 0) fail_dir(errno);
+    return;
+  }
+  if (::renameat2(AT_FDCWD, staged.c_str(), AT_FDCWD, dir.c_str(), RENAME_EXCHANGE) != 0) {
+    if (errno != EINVAL && errno != ENOSYS) fail_dir(errno);
+    // No exchange on this filesystem: the old folder steps aside first, so the new one can take its name.
+    const fs::path old = dir.string() + ".old." + std::to_string(::getpid());
+    if (::rename(dir.c_str(), old.c_str()) != 0) fail_dir(errno);
+    if (::rename(staged.c_str(), dir.c_str()) != 0) {
+      const int error = errno;
+      ::rename(old.c_str(), dir.c_str());
+      fail_dir(error);
+    }
+    fs::remove_all(old, ec);
+    return;
+  }
+  fs::remove_all(staged, ec);  // it holds the previous content now
 }
 
 }  // namespace pmfrag

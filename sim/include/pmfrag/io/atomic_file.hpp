@@ -1,10 +1,11 @@
 // Outputs whole or absent: every file pmfrag writes in one go (run.json, summary.json, CSV tables, scene copies,
-// PVD collections) goes through write_file_atomically.
+// VTU and PVD files, PNG frames, movies) goes through these helpers.
 #pragma once
 
 #include <filesystem>
 #include <functional>
 #include <ostream>
+#include <string_view>
 
 namespace pmfrag {
 
@@ -15,9 +16,19 @@ namespace pmfrag {
 /// reason, e.g. "out/run/summary.json: cannot write: No space left on device (the previous file is unchanged)".
 void write_file_atomically(const std::filesystem::path& path, const std::function<void(std::ostream&)>& body);
 
-/// The same for a file another library writes by name (VTK's writers): `write(tmp)` writes the temporary file
-/// and returns false if it failed; it is then flushed to disk and renamed over `path`, or removed.
+/// The same for content already in memory (a PNG frame encoded by libpng).
+void write_file_atomically(const std::filesystem::path& path, std::string_view bytes);
+
+/// The same for a file another library or program writes by name (VTK's writers, ffmpeg): `write(tmp)` writes
+/// the temporary file and returns false if it failed (errno then says why, or EIO if it is 0) or throws; the
+/// file is then flushed to disk and renamed over `path`, or removed.
 void write_file_atomically_by_name(const std::filesystem::path& path,
                                    const std::function<bool(const std::filesystem::path& tmp)>& write);
+
+/// A folder of many files written whole or not at all (a render's frames/): the files are written into
+/// `staged` (a sibling of `dir`), which then takes the place of `dir` in one step (renameat2 RENAME_EXCHANGE;
+/// two renames where the filesystem lacks it), and the previous content is removed. Until then `dir` is
+/// untouched. Throws std::runtime_error naming the folder and the system's reason.
+void replace_directory(const std::filesystem::path& dir, const std::filesystem::path& staged);
 
 }  // namespace pmfrag
