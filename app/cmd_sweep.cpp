@@ -138,6 +138,7 @@ void sweep(const SweepCli& o) {
   }
   std::fflush(stdout);
   world.barrier();  // the case folders are ready before any rank starts
+  become_worker_parent();
   std::map<pid_t, std::pair<std::size_t, int>> running;  // pid -> (case, stage: 1 run, 2 fragments)
   std::size_t next = 0;
   auto start = [&](std::size_t c, int stage) -> pid_t {
@@ -241,6 +242,9 @@ void sweep(const SweepCli& o) {
     }
   });
   std::printf("wrote %s: %zu cases, %ld failed\n", csv.c_str(), cases.size(), failed);
+  if (failed > 0)  // scripts learn of it; the finished cases stay, and a rerun retries only the failed ones
+    throw std::runtime_error(std::to_string(failed) + " of " + std::to_string(cases.size()) + " cases failed (" +
+                             csv.string() + " and each one's error.txt say why)");
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include "cmd_study.hpp"
 #include "cmd_sweep.hpp"
 #include "parse.hpp"
+#include "process.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -19,6 +20,7 @@ int main(int argc, char** argv) {
   // A write past a file-size limit (ulimit -f) then fails with EFBIG, which the writers report with the file's
   // name, instead of killing the process before it can say anything.
   std::signal(SIGXFSZ, SIG_IGN);
+  pmfrag::app::exit_with_worker_parent();
   CLI::App app{
       "pmfrag - particle modeling (Wang & Ostoja-Starzewski 2005, after Greenspan) of dynamic fracture and "
       "fragmentation: material model, simulation, fragments, ParaView export and figures."};

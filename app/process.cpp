@@ -1,10 +1,13 @@
 #include "process.hpp"
 
 #include <fcntl.h>
+#include <sys/prctl.h>
 #include <spawn.h>
 #include <unistd.h>
 
+#include <csignal>
 #include <cstdlib>
+#include <string>
 #include <sstream>
 #include <stdexcept>
 
@@ -27,6 +30,22 @@ pid_t start_process(const std::string& program, const std::vector<std::string>& 
   posix_spawn_file_actions_destroy(&fa);
   if (rc != 0) throw std::runtime_error("cannot start " + program + " (log: " + log.string() + ")");
   return pid;
+}
+
+namespace {
+constexpr const char* parent_variable = "PMFRAG_WORKER_OF";
+}
+
+void become_worker_parent() { ::setenv(parent_variable, std::to_string(::getpid()).c_str(), 1); }
+
+void exit_with_worker_parent() {
+  const char* parent = std::getenv(parent_variable);
+  if (!parent) return;
+  const pid_t sweep = static_cast<pid_t>(std::atol(parent));
+  ::unsetenv(parent_variable);  // not for what this worker starts in turn
+  if (sweep == ::getpid()) return;
+  ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+  if (::getppid() != sweep) std::raise(SIGTERM);  // the sweep died before the signal was armed
 }
 
 std::string find_on_path(const std::string& name) {

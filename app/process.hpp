@@ -15,6 +15,13 @@ namespace pmfrag::app {
 pid_t start_process(const std::string& program, const std::vector<std::string>& args,
                     const std::filesystem::path& log, bool search_path = false);
 
+/// A sweep's workers die with the sweep: the sweep calls become_worker_parent() before starting them, and
+/// every pmfrag process calls exit_with_worker_parent() first. A worker whose sweep is gone (killed, however)
+/// then gets SIGTERM (a run writes its checkpoint and stops), so no orphan goes on writing into a case folder
+/// that a rerun of the sweep clears.
+void become_worker_parent();
+void exit_with_worker_parent();
+
 /// Path of an executable named `name` on PATH, or "" if there is none.
 std::string find_on_path(const std::string& name);
 

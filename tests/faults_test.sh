@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Faults, injected as a user would meet them (label `faults`): a full disk (ulimit -f: writes fail with
-# EFBIG), two writers on one run folder, a process killed mid-stage, exponents out of range. Each must end
+# EFBIG) for run, fragments, export, render (frames and movie) and sweep, two writers on one run folder, a
+# process killed mid-stage (fragments, export, render, a sweep between cases), exponents out of range. Each must end
 # with a non-zero exit and one line naming the file and the cause, and keep what was there before.
 #   bash tests/faults_test.sh PMFRAG SOURCE_DIR
 set -u
@@ -31,10 +32,40 @@ check "export on a full disk exits non-zero, naming the file and the cause" \
 
 err=$( (ulimit -f 1500; "$pmfrag" run "$plate" --out "$work/full" -q --set time.end=3e-2) 2>&1 >/dev/null); rc=$?
 check "run on a full disk exits 1 (no crash on the way out)" "[ $rc -eq 1 ]"
-check "run on a full disk says so in one line, without HDF5's stack" \
-  "[ \$(printf '%s\n' \"\$err\" | wc -l) -eq 1 ] && printf '%s' \"\$err\" | grep -q 'trajectory.h5: cannot write: File too large'"
+check "run on a full disk says so in one line, without HDF5's stack, with the frames and checkpoint kept" \
+  "[ \$(printf '%s\n' \"\$err\" | wc -l) -eq 1 ] && printf '%s' \"\$err\" | grep -q 'trajectory.h5: cannot write: File too large (frames 0\.\.[0-9]*, to t = .* s, are whole; the checkpoint at frame [0-9]*, t = .* s, is intact)'"
 check "the frames written before the disk filled are read" \
   "\"$pmfrag\" fragments \"$work/full\" | grep -q 'frames lie before the cut'"
+
+# render: the new frames go to frames.part/, so a failed render keeps the previous frames and leaves no partial ones.
+"$pmfrag" render "$work/good" --every 10 > /dev/null
+frame0=$(sum "$work/good/frames/frame_00000.png")
+err=$( (ulimit -f 20; "$pmfrag" render "$work/good" --every 5) 2>&1 >/dev/null); rc=$?
+check "render on a full disk exits non-zero, naming the frame and the cause" \
+  "[ $rc -ne 0 ] && printf '%s' \"\$err\" | grep -q 'frame_00000.png: cannot write: File too large'"
+check "render on a full disk keeps the previous frames, whole, and none of the new ones" \
+  "[ \"\$(sum $work/good/frames/frame_00000.png)\" = $frame0 ] && [ ! -e $work/good/frames/frame_00005.png ] && [ ! -e $work/good/frames.part ]"
+if command -v ffmpeg > /dev/null; then
+  "$pmfrag" render "$work/good" --every 10 --size 256 --movie > /dev/null
+  movie=$(sum "$work/good/crack.mp4")
+  err=$( (ulimit -f 200; "$pmfrag" render "$work/good" --every 1 --size 512 --movie) 2>&1 >/dev/null); rc=$?
+  check "a movie on a full disk exits non-zero, naming crack.mp4 and ffmpeg's reason" \
+    "[ $rc -ne 0 ] && printf '%s' \"\$err\" | grep -q 'crack.mp4: cannot write: ffmpeg: .*File too large'"
+  check "and keeps the previous movie" "[ \"\$(sum $work/good/crack.mp4)\" = $movie ]"
+else
+  echo "skip: the movie on a full disk (no ffmpeg)"
+fi
+
+# sweep: a case that cannot write fails alone, the sweep exits 1, the finished cases are untouched.
+sweep_spec=$src/cases/sweep_pq.toml
+sweep_args=(--jobs 1 --set time.end=4e-3)
+"$pmfrag" sweep "$sweep_spec" --out "$work/sweep" --pairs 7,14 5,10 "${sweep_args[@]}" > /dev/null 2>&1
+case_sum=$(sum "$work/sweep/p7_q14/summary.json")
+out=$( (ulimit -f 100; "$pmfrag" sweep "$sweep_spec" --out "$work/sweep" --pairs 7,14 5,10 1,2 "${sweep_args[@]}") 2>&1); rc=$?
+check "sweep on a full disk exits 1 and says which cases failed" "[ $rc -eq 1 ] && printf '%s' \"\$out\" | grep -q '1 of 3 cases failed'"
+check "the failed case's row in sweep.csv names the file and the cause" \
+  "grep -q '^p1_q2,.*trajectory.h5.part: cannot write: File too large' $work/sweep/sweep.csv"
+check "the finished cases are untouched" "[ \"\$(sum $work/sweep/p7_q14/summary.json)\" = $case_sum ]"
 
 # --- two writers -----------------------------------------------------------------------------------------
 "$pmfrag" run "$plate" --out "$work/busy" -q --set time.end=1 > /dev/null 2>&1 &
@@ -75,6 +106,52 @@ check "a killed fragments leaves each table whole or absent" "[ $whole -eq 1 ]"
 "$pmfrag" fragments "$work/killed" > /dev/null
 check "fragments run again after a kill writes what an uninterrupted run wrote" \
   "[ \"\$(sum $work/killed/summary.json)\" = $before ] && cmp -s \"$work/killed/fragments_final.csv\" \"$work/good/fragments_final.csv\""
+
+# export and render killed midway: running the same command again writes what an uninterrupted one wrote.
+cp -r "$work/good" "$work/whole"
+rm -rf "$work/whole"/frames "$work/whole"/vtk "$work/whole"/particles.pvd "$work/whole"/crack.*
+"$pmfrag" export "$work/whole" > /dev/null
+"$pmfrag" render "$work/whole" --every 3 > /dev/null
+for stage in "export" "render --every 3"; do
+  cp -r "$work/good" "$work/k_${stage%% *}"
+  d=$work/k_${stage%% *}
+  rm -rf "$d"/frames "$d"/vtk "$d"/particles.pvd
+  "$pmfrag" $stage "$d" > /dev/null 2>&1 &
+  k=$!
+  sleep 0.4
+  kill -9 "$k" 2>/dev/null
+  wait "$k" 2>/dev/null
+  "$pmfrag" $stage "$d" > /dev/null
+done
+check "export killed, then run again, equals an uninterrupted export" \
+  "diff -r $work/whole/vtk $work/k_export/vtk > /dev/null && cmp -s $work/whole/particles.pvd $work/k_export/particles.pvd"
+check "render killed, then run again, equals an uninterrupted render" \
+  "diff -r $work/whole/frames $work/k_render/frames > /dev/null && [ ! -e $work/k_render/frames.part ]"
+
+# A sweep killed between cases: its workers die with it (no orphan writes on), and the same command finishes the
+# sweep with the numbers of an uninterrupted one (the timing columns aside).
+"$pmfrag" sweep "$sweep_spec" --out "$work/sweep_whole" --pairs 7,14 5,10 3,5 "${sweep_args[@]}" > /dev/null 2>&1
+"$pmfrag" sweep "$sweep_spec" --out "$work/sweep_killed" --pairs 7,14 5,10 3,5 "${sweep_args[@]}" > /dev/null 2>&1 &
+k=$!
+for _ in $(seq 400); do [ -e "$work/sweep_killed/p7_q14/summary.json" ] && break; sleep 0.05; done
+kill -9 "$k"
+wait "$k" 2>/dev/null
+orphans=0
+for _ in $(seq 50); do
+  pgrep -f "pmfrag run .*$work/sweep_killed" > /dev/null || { orphans=0; break; }
+  orphans=1
+  sleep 0.1
+done
+check "a killed sweep's workers stop with it" "[ $orphans -eq 0 ]"
+"$pmfrag" sweep "$sweep_spec" --out "$work/sweep_killed" --pairs 7,14 5,10 3,5 "${sweep_args[@]}" > /dev/null 2>&1
+check "the sweep run again after a kill completes with the uninterrupted sweep's results" \
+  "/usr/bin/python3 - $work/sweep_whole/sweep.csv $work/sweep_killed/sweep.csv <<'PY'
+import csv, sys
+def rows(path):
+    return [{k: v for k, v in r.items() if k not in ('particle_steps_per_s', 'wall_s')} for r in csv.DictReader(open(path))]
+a, b = rows(sys.argv[1]), rows(sys.argv[2])
+sys.exit(0 if a == b and len(a) == 3 and all(r['status'] == 'completed' for r in a) else 1)
+PY"
 
 # --- a read-only folder ---------------------------------------------------------------------------------
 if [ "$(id -u)" -ne 0 ]; then

@@ -1,5 +1,7 @@
 #include "pmfrag/io/h5md.hpp"
 
+#include "pmfrag/io/atomic_file.hpp"
+
 #include <hdf5.h>
 #include <unistd.h>
 
@@ -225,6 +227,19 @@ struct H5mdWriter::Impl {
   Series position, velocity;
   std::map<std::string, Series> observables;
   hid_t obs_group = -1;
+  /// Runs `body`, which writes; an HDF5 call that fails there becomes one line naming the file and the system's
+  /// cause. HDF5 does not pass on why a write failed; the errno of its last system call says (cleared first).
+  template <class F>
+  void writing(F&& body) const {
+    errno = 0;
+    try {
+      body();
+    } catch (const std::runtime_error&) {
+      const int err = errno;
+      if (err == 0) throw;  // not a system error: HDF5's own message is the best there is
+      throw std::runtime_error((part.empty() ? path : part) + ": cannot write: " + std::strerror(err));
+    }
+  }
 };
 
 H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& scene, const RunParameters& run)
@@ -234,8 +249,20 @@ H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& 
   // trajectory.h5 that exists holds at least one whole frame, even if the run is killed at once.
   const std::string part = path + ".part";
   m.part = part, m.path = path;
+  errno = 0;
   m.file = H5Fcreate(part.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-  if (m.file < 0) throw std::runtime_error(path + ": cannot create trajectory file");
+  if (m.file < 0)
+    throw std::runtime_error(part + ": cannot create the trajectory: " + std::strerror(errno != 0 ? errno : EIO));
+  try {
+    m.writing([&] { create(sys, scene, run); });
+  } catch (const std::runtime_error& e) {
+    std::remove(part.c_str());  // the destructor does not run for a constructor that throws
+    throw std::runtime_error(std::string(e.what()) + " (no frame was written)");
+  }
+}
+
+void H5mdWriter::create(const System& sys, const Scene& scene, const RunParameters& run) {
+  auto& m = *impl_;
   const hsize_t n = sys.size(), dim = static_cast<hsize_t>(sys.dim);
 
   hid_t h5md = make_group(m.file, "h5md");
@@ -406,6 +433,19 @@ void H5mdWriter::write_frame(long step, double time, const double* position, con
   auto& m = *impl_;
   if (m.velocity.group >= 0 && !velocity)
     throw std::logic_error(m.path + ": a frame without the velocities this trajectory stores");
+  m.writing([&] { append_frame(step, time, position, velocity, obs); });
+  flush();
+  ++frames_;  // counted once it is on disk: a failed frame is not among the frames() that are whole
+  if (!m.part.empty()) {  // the first frame is whole: the trajectory may appear under its name
+    if (std::rename(m.part.c_str(), m.path.c_str()) != 0)
+      throw std::runtime_error(m.path + ": cannot rename from " + m.part + ": " + std::strerror(errno));
+    m.part.clear();
+  }
+}
+
+void H5mdWriter::append_frame(long step, double time, const double* position, const double* velocity,
+                              const Observables& obs) {
+  auto& m = *impl_;
   const hsize_t k = static_cast<hsize_t>(frames_);
   m.position.append(k, step, time, position);
   if (m.velocity.group >= 0) m.velocity.append(k, step, time, velocity);
@@ -420,13 +460,6 @@ void H5mdWriter::write_frame(long step, double time, const double* position, con
   m.observables["energy_balance"].append(k, step, time, &balance);
   m.observables["pairs_beyond_cutoff"].append(k, step, time, &beyond);
   m.rows_at_frame.append(k, step, time, &events_);
-  ++frames_;
-  flush();
-  if (!m.part.empty()) {  // the first frame is whole: the trajectory may appear under its name
-    if (std::rename(m.part.c_str(), m.path.c_str()) != 0)
-      throw std::runtime_error(m.path + ": cannot rename from " + m.part);
-    m.part.clear();
-  }
 }
 
 void H5mdWriter::append_bond_events(const std::vector<BondEvent>& events) {
@@ -438,20 +471,22 @@ void H5mdWriter::append_bond_events(const std::vector<BondEvent>& events) {
   std::vector<std::int8_t> re_formed(n);
   for (std::size_t k = 0; k < n; ++k)
     step[k] = events[k].step, time[k] = events[k].time, bond[k] = events[k].bond, re_formed[k] = events[k].re_formed;
-  append_rows(m.columns[0], at, n, H5T_NATIVE_LONG, step.data());
-  append_rows(m.columns[1], at, n, H5T_NATIVE_DOUBLE, time.data());
-  append_rows(m.columns[2], at, n, H5T_NATIVE_LONG, bond.data());
-  append_rows(m.columns[3], at, n, H5T_NATIVE_INT8, re_formed.data());
+  m.writing([&] {
+    append_rows(m.columns[0], at, n, H5T_NATIVE_LONG, step.data());
+    append_rows(m.columns[1], at, n, H5T_NATIVE_DOUBLE, time.data());
+    append_rows(m.columns[2], at, n, H5T_NATIVE_LONG, bond.data());
+    append_rows(m.columns[3], at, n, H5T_NATIVE_INT8, re_formed.data());
+  });
   events_ += static_cast<long>(n);
 }
 
 void H5mdWriter::flush() {
-  errno = 0;  // HDF5 does not pass on why a write failed; the system's errno of its last call says
-  if (H5Fflush(impl_->file, H5F_SCOPE_GLOBAL) < 0) {
-    const int err = errno != 0 ? errno : EIO;
-    const std::string& name = impl_->part.empty() ? impl_->path : impl_->part;
-    throw std::runtime_error(name + ": cannot write: " + std::strerror(err) + " (the frames and checkpoint written before are kept)");
-  }
+  impl_->writing([&] {
+    if (H5Fflush(impl_->file, H5F_SCOPE_GLOBAL) < 0) {
+      if (errno == 0) errno = EIO;
+      throw std::runtime_error("flush");
+    }
+  });
 }
 
 void H5mdWriter::mark_incomplete(const std::string& why) {
@@ -799,18 +834,29 @@ void write_checkpoint(const std::string& path, const Checkpoint& c) {
 
 void write_checkpoint(const std::string& path, const Checkpoint& c, const double* position, const double* velocity,
                       std::size_t values) {
-  const std::string tmp = path + ".tmp";
-  hid_t f = H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-  if (f < 0) throw std::runtime_error(tmp + ": cannot write checkpoint");
-  array_dataset<long>(f, "step", {c.step}, {});
-  array_dataset<long>(f, "frames", {c.frames}, {});
-  array_dataset<long>(f, "bond_events", {c.bond_events}, {});
-  array_dataset(f, "time_dt_level_calm", std::vector<double>{c.time, c.dt, double(c.level), double(c.calm)}, {4});
-  array_dataset(f, "position", values ? position : nullptr, {values});
-  array_dataset(f, "velocity", values ? velocity : nullptr, {values});
-  array_dataset(f, "effects", c.effects, {c.effects.size()});
-  H5Fclose(f);
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw std::runtime_error(path + ": cannot rename checkpoint");
+  // Whole or not at all: a checkpoint that fails to write (a full disk) leaves the previous one, which --resume
+  // still needs. HDF5 does not pass on why; the errno of its last system call says.
+  write_file_atomically_by_name(path, [&](const std::filesystem::path& tmp) {
+    errno = 0;
+    hid_t f = H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    if (f < 0) return false;
+    bool ok = true;
+    try {
+      array_dataset<long>(f, "step", {c.step}, {});
+      array_dataset<long>(f, "frames", {c.frames}, {});
+      array_dataset<long>(f, "bond_events", {c.bond_events}, {});
+      array_dataset(f, "time_dt_level_calm", std::vector<double>{c.time, c.dt, double(c.level), double(c.calm)}, {4});
+      array_dataset(f, "position", values ? position : nullptr, {values});
+      array_dataset(f, "velocity", values ? velocity : nullptr, {values});
+      array_dataset(f, "effects", c.effects, {c.effects.size()});
+    } catch (const std::runtime_error&) {
+      ok = false;
+    }
+    const int err = errno;
+    ok = H5Fclose(f) >= 0 && ok;
+    if (!ok && err != 0) errno = err;
+    return ok;
+  });
 }
 
 Checkpoint read_checkpoint(const std::string& path) {

@@ -84,12 +84,37 @@ class RunOutput {
   // N x D layout of a frame, so no flat copy is made (32 B a particle in 2-D, 48 in 3-D).
   static_assert(sizeof(Eigen::Matrix<double, D, 1>) == D * sizeof(double));
   void frame() {
-    record_events();
-    const auto& s = lf_.state();
-    if (writer_.writes_velocity()) lf_.whole_step_velocity(v_);
-    writer_.write_frame(s.step, s.time(), s.x.data()->data(), v_.empty() ? nullptr : v_.data()->data(), lf_.observe());
+    failing_write_says_what_is_kept([&] {
+      record_events();
+      const auto& s = lf_.state();
+      if (writer_.writes_velocity()) lf_.whole_step_velocity(v_);
+      writer_.write_frame(s.step, s.time(), s.x.data()->data(), v_.empty() ? nullptr : v_.data()->data(), lf_.observe());
+      last_frame_time_ = s.time();
+    });
   }
   void checkpoint(const StepLevels& levels) {
+    failing_write_says_what_is_kept([&] { write_checkpoint_now(levels); });
+    checkpoint_frames_ = writer_.frames(), checkpoint_time_ = lf_.state().time();
+  }
+  void resumed_from(const Checkpoint& c) { checkpoint_frames_ = c.frames, checkpoint_time_ = c.time; }
+
+ private:
+  // A write that fails (a full disk) ends the run with one line: the file and the cause, then what is kept.
+  template <class F>
+  void failing_write_says_what_is_kept(F&& write) {
+    try {
+      write();
+    } catch (const std::runtime_error& e) {
+      std::string kept = writer_.frames() > 0 ? "frames 0.." + std::to_string(writer_.frames() - 1) + ", to t = " +
+                                                    fmt("%.6g", last_frame_time_) + " s, are whole"
+                                              : "no frame was written";
+      kept += checkpoint_frames_ > 0 ? "; the checkpoint at frame " + std::to_string(checkpoint_frames_ - 1) +
+                                           ", t = " + fmt("%.6g", checkpoint_time_) + " s, is intact"
+                                     : "; there is no checkpoint yet";
+      throw std::runtime_error(std::string(e.what()) + " (" + kept + ")");
+    }
+  }
+  void write_checkpoint_now(const StepLevels& levels) {
     record_events();
     writer_.flush();  // the rows the checkpoint counts are on disk before it
     const auto& s = lf_.state();
@@ -104,7 +129,8 @@ class RunOutput {
     write_checkpoint(checkpoint_path_, c, s.x.data()->data(), s.v.data()->data(), s.size() * D);
   }
 
- private:
+  double last_frame_time_ = 0.0, checkpoint_time_ = 0.0;
+  long checkpoint_frames_ = 0;
   H5mdWriter& writer_;
   Leapfrog<D>& lf_;
   std::string checkpoint_path_;
@@ -236,6 +262,7 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
   log_start(opt, sys, lf, at, dt, adaptive);
 
   RunOutput<D> out(writer, lf, (dir / "checkpoint.h5").string());
+  if (from) out.resumed_from(*from);
   StepLevels levels(dt, at.every_s);
   if (from) levels.restore(from->level, from->calm);
   ProgressReport progress(opt);

@@ -52,6 +52,8 @@ class H5mdWriter {
   void close();
 
  private:
+  void create(const System& sys, const Scene& scene, const RunParameters& run);
+  void append_frame(long step, double time, const double* position, const double* velocity, const Observables& obs);
   struct Impl;
   std::unique_ptr<Impl> impl_;
   long frames_ = 0, events_ = 0;
