@@ -1,6 +1,7 @@
 #include "cmd_export.hpp"
 
 #include "parse.hpp"
+#include "pmfrag/io/atomic_file.hpp"
 #include "pmfrag/io/folder_lock.hpp"
 #include "pmfrag/analysis/export_mdanalysis.hpp"
 #include "pmfrag/analysis/export_vtk.hpp"
@@ -28,6 +29,7 @@ void run_mdanalysis(const ExportCli& o) {
   if (!std::filesystem::exists(std::filesystem::path(o.dir) / "trajectory.h5"))
     throw UsageError(o.dir + ": no trajectory.h5 (run `pmfrag run SCENE --out DIR` first)");
   const FolderLock lock(o.dir);  // one writer per run folder
+  remove_temporaries(std::filesystem::path(o.dir) / "mdanalysis");
   analysis::MdanalysisExportOptions opt;
   opt.every = o.every;
   const auto r = analysis::export_mdanalysis(o.dir, opt);
@@ -57,6 +59,7 @@ void run(const ExportCli& o) {
   if (!std::filesystem::exists(std::filesystem::path(o.dir) / "trajectory.h5"))
     throw UsageError(o.dir + ": no trajectory.h5 (run `pmfrag run SCENE --out DIR` first)");
   const FolderLock lock(o.dir);  // one writer per run folder: a second is refused at once
+  remove_temporaries(std::filesystem::path(o.dir) / "vtk");  // a killed export's half-written frame
   const auto r = analysis::export_vtk(o.dir, opt);
   std::printf("exported %ld of %ld frames to %s/vtk/ and %s/particles.pvd%s\n", r.frames_written, r.frames_read,
               o.dir.c_str(), o.dir.c_str(), r.partial ? " (PARTIAL)" : "");

@@ -67,6 +67,19 @@ check "the failed case's row in sweep.csv names the file and the cause" \
   "grep -q '^p1_q2,.*trajectory.h5.part: cannot write: File too large' $work/sweep/sweep.csv"
 check "the finished cases are untouched" "[ \"\$(sum $work/sweep/p7_q14/summary.json)\" = $case_sum ]"
 
+# --resume after the full disk: the cut trajectory is rebuilt from the frames the checkpoint counts, and the run
+# ends with the frames of an uninterrupted one, bitwise.
+"$pmfrag" run --resume "$work/full" -q > /dev/null 2>&1; rc=$?
+"$pmfrag" run "$plate" --out "$work/full_whole" -q --set time.end=3e-2 > /dev/null 2>&1
+check "--resume after a full disk completes, bitwise the uninterrupted run" \
+  "[ $rc -eq 0 ] && /usr/bin/python3 - $work/full/trajectory.h5 $work/full_whole/trajectory.h5 <<'PY'
+import sys, h5py, numpy as np
+a, b = h5py.File(sys.argv[1], 'r'), h5py.File(sys.argv[2], 'r')
+keys = ['particles/all/position/value', 'particles/all/velocity/value', 'particles/all/position/step',
+        'observables/total_energy/value', 'connectivity/broken_bonds/bond', 'connectivity/broken_bonds/rows_at_frame/value']
+sys.exit(0 if all(a[k].shape == b[k].shape and np.array_equal(a[k][()], b[k][()]) for k in keys) else 1)
+PY"
+
 # --- two writers -----------------------------------------------------------------------------------------
 "$pmfrag" run "$plate" --out "$work/busy" -q --set time.end=1 > /dev/null 2>&1 &
 holder=$!

@@ -130,3 +130,15 @@ TEST(ReplaceDirectory, TheStagedFolderTakesThePlaceOfTheOldOneWhole) {
   EXPECT_EQ(content(frames / "frame_00005.png"), "b5");
   fs::remove_all(d);
 }
+
+TEST(AtomicFile, AKilledWritersTemporariesAreRemovedAndNothingElse) {
+  const fs::path d = fresh_dir("stale");
+  for (const char* name : {"frame_00003.vtu.tmp.4242", "summary.json", "notes.tmp.txt", "a.tmp."})
+    std::ofstream(d / name) << "x";
+  remove_temporaries(d);
+  EXPECT_FALSE(fs::exists(d / "frame_00003.vtu.tmp.4242"));
+  EXPECT_TRUE(fs::exists(d / "summary.json"));
+  EXPECT_TRUE(fs::exists(d / "notes.tmp.txt"));
+  EXPECT_TRUE(fs::exists(d / "a.tmp."));
+  fs::remove_all(d);
+}

@@ -82,6 +82,17 @@ void write_file_atomically_by_name(const fs::path& path, const std::function<boo
   commit(path, tmp);
 }
 
+void remove_temporaries(const fs::path& dir) {
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    const auto at = name.rfind(".tmp.");
+    if (at == std::string::npos || at + 5 == name.size()) continue;
+    if (name.find_first_not_of("0123456789", at + 5) != std::string::npos) continue;
+    if (e.is_regular_file(ec)) fs::remove(e.path(), ec);
+  }
+}
+
 void replace_directory(const fs::path& dir, const fs::path& staged) {
   const auto fail_dir = [&](int error) {
     throw std::runtime_error(dir.string() + ": cannot replace with " + staged.string() + ": " + std::strerror(error));

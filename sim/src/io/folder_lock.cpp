@@ -1,5 +1,7 @@
 #include "pmfrag/io/folder_lock.hpp"
 
+#include "pmfrag/io/atomic_file.hpp"
+
 #include <fcntl.h>
 #include <sys/file.h>
 #include <unistd.h>
@@ -54,6 +56,7 @@ FolderLock::FolderLock(const std::filesystem::path& dir) {
   if (ftruncate(fd_, 0) == 0 && pwrite(fd_, me.data(), me.size(), 0) < 0) {
     // a full disk may refuse the note; the lock still holds
   }
+  remove_temporaries(dir);  // what a killed writer left: with the lock held, no one else is writing them
 }
 
 FolderLock::~FolderLock() {

@@ -10,6 +10,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <cmath>
 #include <sstream>
 #include <cerrno>
 #include <stdexcept>
@@ -882,6 +884,59 @@ Checkpoint read_checkpoint(const std::string& path) {
   }
   H5Fclose(f);
   return c;
+}
+
+bool trajectory_opens_for_append(const std::string& path) {
+  const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  if (f < 0) return false;
+  H5Fclose(f);
+  return true;
+}
+
+void rebuild_trajectory(const std::string& path, const System& sys, const Scene& scene, const RunParameters& run,
+                        long keep_frames, long keep_events) {
+  const std::string rebuilt = path + ".rebuilt";
+  {
+    const H5mdReader cut(path);
+    const auto short_of = [&](const std::string& what) {
+      return std::runtime_error(path + ": cut short (" + cut.damage() + "), and " + what +
+                                ": cannot resume; run the scene again with --force");
+    };
+    if (cut.frames() < keep_frames)
+      throw short_of("it holds " + std::to_string(cut.frames()) + " whole frames of the " +
+                     std::to_string(keep_frames) + " the checkpoint counts");
+    const BondRecord record = cut.bond_record();
+    if (static_cast<long>(record.rows_at_frame.size()) < keep_frames ||
+        static_cast<long>(record.events.size()) < keep_events)
+      throw short_of("its bond record lacks rows the checkpoint counts");
+    std::map<std::string, std::vector<double>> series;
+    for (const char* name : observable_names) {
+      series[name] = cut.observable(name);
+      if (static_cast<long>(series[name].size()) < keep_frames) throw short_of(std::string("its ") + name + " is short");
+    }
+    H5mdWriter out(rebuilt, sys, scene, run);
+    TrajectoryFrame f;
+    long row = 0;
+    const auto events_up_to = [&](long end) {
+      out.append_bond_events(std::vector<BondEvent>(record.events.begin() + row, record.events.begin() + end));
+      row = end;
+    };
+    for (long k = 0; k < keep_frames; ++k) {
+      cut.frame(k, f);
+      events_up_to(record.rows_at_frame[static_cast<std::size_t>(k)]);
+      const auto at = [&](const char* name) { return series[name][static_cast<std::size_t>(k)]; };
+      Observables obs;
+      obs.kinetic = at("kinetic_energy"), obs.potential = at("potential_energy");
+      obs.boundary_work = at("boundary_work"), obs.bond_break_energy = at("bond_break_energy");
+      obs.pairs_beyond_cutoff = std::lround(at("pairs_beyond_cutoff"));
+      out.write_frame(f.step, f.time, f.position.data(), f.velocity.empty() ? nullptr : f.velocity.data(), obs);
+    }
+    events_up_to(keep_events);
+    out.flush();
+    out.close();
+  }
+  if (std::rename(rebuilt.c_str(), path.c_str()) != 0)
+    throw std::runtime_error(path + ": cannot replace with " + rebuilt + ": " + std::strerror(errno));
 }
 
 }  // namespace pmfrag

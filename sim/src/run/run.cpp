@@ -250,6 +250,11 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
   std::filesystem::create_directories(dir);
   if (!from) start_run_folder(dir, scene, opt.force);
   const std::string traj = (dir / "trajectory.h5").string();
+  if (from && !trajectory_opens_for_append(traj)) {
+    // A full disk cut the trajectory's end; the frames the checkpoint counts are copied into a new one.
+    rebuild_trajectory(traj, sys, scene, rp, from->frames, from->bond_events);
+    if (opt.log) opt.log("rebuilt " + traj + " from its first " + std::to_string(from->frames) + " frames (its end was cut)");
+  }
   std::unique_ptr<H5mdWriter> writer_ptr = from ? std::make_unique<H5mdWriter>(traj, from->frames, from->bond_events)
                                                 : std::make_unique<H5mdWriter>(traj, sys, scene, rp);
   H5mdWriter& writer = *writer_ptr;

@@ -25,6 +25,10 @@ void write_file_atomically(const std::filesystem::path& path, std::string_view b
 void write_file_atomically_by_name(const std::filesystem::path& path,
                                    const std::function<bool(const std::filesystem::path& tmp)>& write);
 
+/// Removes the temporary files these helpers leave when their process is killed mid-write (NAME.tmp.PID) from
+/// `dir` (not its subfolders). Only for a folder whose writer holds its FolderLock: then any such file is stale.
+void remove_temporaries(const std::filesystem::path& dir);
+
 /// A folder of many files written whole or not at all (a render's frames/): the files are written into
 /// `staged` (a sibling of `dir`), which then takes the place of `dir` in one step (renameat2 RENAME_EXCHANGE;
 /// two renames where the filesystem lacks it), and the previous content is removed. Until then `dir` is
