@@ -96,7 +96,10 @@ class RunOutput {
     failing_write_says_what_is_kept([&] { write_checkpoint_now(levels); });
     checkpoint_frames_ = writer_.frames(), checkpoint_time_ = lf_.state().time();
   }
-  void resumed_from(const Checkpoint& c) { checkpoint_frames_ = c.frames, checkpoint_time_ = c.time; }
+  void resumed_from(const Checkpoint& c) {
+    checkpoint_frames_ = c.frames, checkpoint_time_ = c.time;
+    last_frame_time_ = -1.0;  // not read back: the first frame written after the resume sets it
+  }
 
  private:
   // A write that fails (a full disk) ends the run with one line: the file and the cause, then what is kept.
@@ -105,9 +108,11 @@ class RunOutput {
     try {
       write();
     } catch (const std::runtime_error& e) {
-      std::string kept = writer_.frames() > 0 ? "frames 0.." + std::to_string(writer_.frames() - 1) + ", to t = " +
-                                                    fmt("%.6g", last_frame_time_) + " s, are whole"
-                                              : "no frame was written";
+      // The time is known for a frame this process wrote; a resumed run's earlier frames are named by number.
+      const std::string until = last_frame_time_ >= 0.0 ? ", to t = " + fmt("%.6g", last_frame_time_) + " s," : "";
+      std::string kept = writer_.frames() > 0
+                             ? "frames 0.." + std::to_string(writer_.frames() - 1) + until + " are whole"
+                             : "no frame was written";
       kept += checkpoint_frames_ > 0 ? "; the checkpoint at frame " + std::to_string(checkpoint_frames_ - 1) +
                                            ", t = " + fmt("%.6g", checkpoint_time_) + " s, is intact"
                                      : "; there is no checkpoint yet";
