@@ -220,8 +220,9 @@ void run(const RenderCli& o) {
   // --every) never mix into the movie.
   const fs::path staged_dir = dir / "frames.part";
   if (!o.no_frames) {
+    require_folder_or_nothing(frames_dir);
     fs::remove_all(staged_dir);  // what a killed render left
-    fs::create_directories(staged_dir);
+    make_folder(staged_dir);
     if (!damage.empty())
       write_file_atomically(staged_dir / "PARTIAL.txt", [&](std::ostream& note) {
         note << "frames 0.." << frames - 1 << " of a damaged trajectory: " << damage << "\n";

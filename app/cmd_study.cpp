@@ -136,7 +136,7 @@ void study_accuracy(const StudyCli& o) {
     throw UsageError(o.scene + ": the accuracy study needs velocities in the frames; drop output.fields = [\"position\"]");
   const System sys = build_system(sc);
   const double limit = choose_step(sc, sys).limit;
-  fs::create_directories(o.out);
+  make_folder(o.out);
   std::vector<Row> rows;
 
   const bool want_dt = o.knobs.find("dt") != std::string::npos, want_r0 = o.knobs.find("r0") != std::string::npos,

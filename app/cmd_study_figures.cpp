@@ -47,7 +47,7 @@ struct Table {
 
 void figures(const std::string& out) {
   const fs::path dir(out);
-  fs::create_directories(dir);
+  make_folder(dir);
   render::HeadlessWindow window(900, 650);
   std::vector<std::string> wrote;
   auto png = [&](const std::string& name) {

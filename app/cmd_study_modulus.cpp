@@ -23,7 +23,7 @@ namespace fs = std::filesystem;
 
 void modulus(const std::string& out, int scale) {
   const fs::path dir(out);
-  fs::create_directories(dir);
+  make_folder(dir);
   std::vector<studies::TensileResult> rows;
   std::printf("%-4s %-7s %9s %12s %12s %8s %8s %9s\n", "dim", "(p,q)", "particles", "E Eq.26 GPa", "E fit GPa",
               "ratio", "Poisson", "fit rms");

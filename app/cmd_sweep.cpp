@@ -114,7 +114,7 @@ void sweep(const SweepCli& o) {
   const int threads = std::max(1, cores / std::max(1, world.size() > 1 ? world.local_size() : jobs));
   const std::string who = world.size() > 1 ? "[rank " + std::to_string(world.rank()) + "]" : "";
   if (lead) {
-    fs::create_directories(o.out);
+    make_folder(o.out);
     if (world.size() > 1)
       std::printf("sweep %s: %zu cases of %s, %d MPI ranks x %d threads, cases handed out as ranks free up\n",
                   o.spec.c_str(), cases.size(), spec.base.c_str(), world.size(), threads);
@@ -131,7 +131,7 @@ void sweep(const SweepCli& o) {
     } else {
       if (lead) {
         fs::remove_all(dir);
-        fs::create_directories(dir);
+        make_folder(dir);
       }
       todo.push_back(c);
     }

@@ -9,6 +9,7 @@
 #include "cmd_sweep.hpp"
 #include "parse.hpp"
 #include "process.hpp"
+#include "pmfrag/io/h5md.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -25,6 +26,9 @@ int main(int argc, char** argv) {
       "pmfrag - particle modeling (Wang & Ostoja-Starzewski 2005, after Greenspan) of dynamic fracture and "
       "fragmentation: material model, simulation, fragments, ParaView export and figures."};
   app.require_subcommand(1);
+  app.fallthrough();  // --verbose may come after the subcommand too
+  app.add_flag_callback("--verbose", [] { pmfrag::show_library_diagnostics(true); },
+                        "Print the libraries' own error reports (HDF5's stack) beside pmfrag's one-line messages");
   pmfrag::app::add_material_command(app);
   pmfrag::app::add_run_command(app);
   pmfrag::app::add_scene_command(app);

@@ -166,17 +166,51 @@ a, b = rows(sys.argv[1]), rows(sys.argv[2])
 sys.exit(0 if a == b and len(a) == 3 and all(r['status'] == 'completed' for r in a) else 1)
 PY"
 
-# --- a read-only folder ---------------------------------------------------------------------------------
-if [ "$(id -u)" -ne 0 ]; then
-  cp -r "$work/good" "$work/ro"
-  chmod a-w "$work/ro"
-  err=$("$pmfrag" fragments "$work/ro" 2>&1 >/dev/null); rc=$?
-  check "fragments in a read-only folder exits non-zero, naming the path and the cause" \
-    "[ $rc -ne 0 ] && printf '%s' \"\$err\" | grep -q 'Permission denied'"
-  chmod u+w "$work/ro"
-else
-  echo "skip: a read-only folder (root writes anywhere; run this test as a user to check it)"
-fi
+# --- a read-only folder, a file where a folder should be ----------------------------------------------
+# Root writes anywhere, so as root the read-only checks run as the user nobody (setpriv), with the binary and
+# the run copied to a folder that user can reach.
+as_user=()
+[ "$(id -u)" -eq 0 ] && as_user=(setpriv --reuid=65534 --regid=65534 --clear-groups)
+pub=$(mktemp -d /tmp/pmfrag-faults.XXXXXX)
+trap '[ -n "$holder" ] && kill -9 "$holder" 2>/dev/null; rm -rf "$work" "$pub"' EXIT
+chmod 755 "$pub"
+cp "$pmfrag" "$plate" "$pub/"
+cp -r "$work/good" "$pub/ro"
+chmod -R a+rX "$pub/ro"
+chmod a-w "$pub/ro"
+ro_before=$(cd "$pub/ro" && sha256sum summary.json trajectory.h5)
+for stage in fragments export render; do
+  err=$("${as_user[@]}" "$pub/pmfrag" $stage "$pub/ro" 2>&1 >/dev/null); rc=$?
+  check "$stage in a read-only folder exits non-zero in one line naming the folder and the cause" \
+    "[ $rc -ne 0 ] && [ \$(printf '%s\n' \"\$err\" | wc -l) -eq 1 ] && printf '%s' \"\$err\" | grep -q '$pub/ro: cannot write in the folder: Permission denied'"
+done
+err=$("${as_user[@]}" "$pub/pmfrag" run "$pub/$(basename "$plate")" --out "$pub/ro/new" -q 2>&1 >/dev/null); rc=$?
+check "run into a read-only folder exits non-zero, naming the folder it cannot make" \
+  "[ $rc -ne 0 ] && printf '%s' \"\$err\" | grep -q '$pub/ro/new: cannot make the folder: Permission denied'"
+check "the read-only run folder is as it was" "[ \"\$(cd $pub/ro && sha256sum summary.json trajectory.h5)\" = \"\$ro_before\" ]"
+
+touch "$work/a_file"
+err=$("$pmfrag" run "$plate" --out "$work/a_file" -q 2>&1 >/dev/null); rc=$?
+check "run --out naming a file is refused in one line, and the file is left alone" \
+  "[ $rc -ne 0 ] && printf '%s' \"\$err\" | grep -q 'a_file: is a file, not a folder' && [ ! -s $work/a_file ]"
+cp -r "$work/good" "$work/filed"
+rm -rf "$work/filed/vtk" "$work/filed/frames"
+echo keep > "$work/filed/vtk"
+echo keep > "$work/filed/frames"
+for stage in export render; do
+  err=$("$pmfrag" $stage "$work/filed" 2>&1 >/dev/null); rc=$?
+  out=vtk; [ $stage = render ] && out=frames
+  check "$stage where a file holds the name $out/ is refused, naming it, and keeps the file" \
+    "[ $rc -ne 0 ] && printf '%s' \"\$err\" | grep -q 'filed/$out: is a file, not a folder' && [ \"\$(cat $work/filed/$out)\" = keep ]"
+done
+
+# A file that is not HDF5: one line by default; HDF5's own stack only with --verbose.
+mkdir "$work/junk" && echo junk > "$work/junk/trajectory.h5"
+err=$("$pmfrag" fragments "$work/junk" 2>&1 >/dev/null); rc=$?
+check "a trajectory that is not HDF5 is refused in one line, naming it, without HDF5's stack" \
+  "[ $rc -ne 0 ] && [ \$(printf '%s\n' \"\$err\" | wc -l) -eq 1 ] && printf '%s' \"\$err\" | grep -q 'junk/trajectory.h5: cannot open as HDF5'"
+err=$("$pmfrag" fragments "$work/junk" --verbose 2>&1 >/dev/null)
+check "--verbose adds HDF5's own stack" "printf '%s' \"\$err\" | grep -q 'HDF5-DIAG' && printf '%s' \"\$err\" | grep -q 'cannot open as HDF5'"
 
 # --- values out of range ---------------------------------------------------------------------------------
 for pq in 7,65 400,800; do

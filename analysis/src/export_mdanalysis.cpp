@@ -1,6 +1,7 @@
 #include "pmfrag/analysis/export_mdanalysis.hpp"
 
 #include "pmfrag/analysis/fragments.hpp"
+#include "pmfrag/io/atomic_file.hpp"
 #include "pmfrag/io/h5md.hpp"
 
 #include <hdf5.h>
@@ -132,7 +133,7 @@ MdanalysisExportResult export_mdanalysis(const std::string& run_dir, const Mdana
   res.note = trajectory_caveats(rd);
   res.partial = !res.note.empty();
   const fs::path out_dir = dir / "mdanalysis", target = out_dir / "trajectory.h5md", part = out_dir / "trajectory.h5md.part";
-  fs::create_directories(out_dir);
+  make_folder(out_dir);
   res.path = target.string();
   const Writer w{target.string()};
   const hsize_t n = rd.particles();

@@ -232,7 +232,7 @@ ExportResult export_vtk(const std::string& run_dir, const ExportOptions& opt) {
   st.nphase = static_cast<std::size_t>(std::lround(std::sqrt(static_cast<double>(st.pair_law.size()))));
   BondStates states = BondStates::open(rd, opt.criterion);
   FragmentTracker tracker(st.n, st.bonds, st.mass);
-  fs::create_directories(dir / "vtk");
+  make_folder(dir / "vtk");
   std::vector<std::pair<double, std::string>> written;
   FrameGrid grid(st, fields, opt.compression);
   TrajectoryFrame f, first;

@@ -93,10 +93,24 @@ void remove_temporaries(const fs::path& dir) {
   }
 }
 
+void require_folder_or_nothing(const fs::path& dir) {
+  std::error_code ec;
+  if (fs::exists(fs::symlink_status(dir, ec)) && !fs::is_directory(dir, ec))
+    throw std::runtime_error(dir.string() + ": is a file, not a folder (move it away or choose another folder)");
+}
+
+void make_folder(const fs::path& dir) {
+  require_folder_or_nothing(dir);
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw std::runtime_error(dir.string() + ": cannot make the folder: " + ec.message());
+}
+
 void replace_directory(const fs::path& dir, const fs::path& staged) {
   const auto fail_dir = [&](int error) {
     throw std::runtime_error(dir.string() + ": cannot replace with " + staged.string() + ": " + std::strerror(error));
   };
+  require_folder_or_nothing(dir);
   std::error_code ec;
   if (!fs::exists(dir, ec)) {
     if (::rename(staged.c_str(), dir.c_str()) != 0) fail_dir(errno);

@@ -35,12 +35,12 @@ std::string read_holder(int fd) {
 }  // namespace
 
 FolderLock::FolderLock(const std::filesystem::path& dir) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) throw std::runtime_error(dir.string() + ": cannot make the folder: " + ec.message());
+  make_folder(dir);
   const std::filesystem::path file = file_of(dir);
   fd_ = open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (fd_ < 0) throw std::runtime_error(file.string() + ": cannot open the folder's lock: " + std::strerror(errno));
+  if (fd_ < 0)  // the first thing a writer puts in the folder, so this is where a read-only folder shows
+    throw std::runtime_error(dir.string() + ": cannot write in the folder: " + std::strerror(errno) + " (its lock, " +
+                             file.filename().string() + ", cannot be opened)");
   if (flock(fd_, LOCK_EX | LOCK_NB) != 0) {
     const int err = errno;
     const std::string holder = err == EWOULDBLOCK ? read_holder(fd_) : std::string();

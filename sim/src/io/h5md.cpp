@@ -24,9 +24,22 @@ namespace {
 // crashed there closing the broken file (HDF5 1.10: a segmentation fault after the error was printed), so
 // the library is told not to: every file is closed explicitly, and the system releases what remains.
 // Its error stack is not printed either: our messages name the file and the cause (one line each).
+// `pmfrag --verbose` turns it back on (show_library_diagnostics).
+bool hdf5_stack_shown = false;
+
+herr_t print_hdf5_stack(hid_t stack, void* stream) { return H5Eprint2(stack, static_cast<FILE*>(stream)); }
+
+// HDF5 keeps this setting per thread in thread-safe builds, so each entry point sets it again.
+void hdf5_stack_as_asked() {
+  if (hdf5_stack_shown)
+    H5Eset_auto2(H5E_DEFAULT, print_hdf5_stack, stderr);
+  else
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+}
+
 [[maybe_unused]] const bool hdf5_quiet = [] {
   H5dont_atexit();
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  hdf5_stack_as_asked();
   return true;
 }();
 
@@ -388,7 +401,7 @@ void H5mdWriter::create(const System& sys, const Scene& scene, const RunParamete
 
 H5mdWriter::H5mdWriter(const std::string& path, long keep_frames, long keep_events) : impl_(std::make_unique<Impl>()) {
   auto& m = *impl_;
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // a missing record is reported below, without HDF5's stack
+  hdf5_stack_as_asked();  // a missing record is reported below, in one line
   m.file = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
   if (m.file < 0) throw std::runtime_error(path + ": cannot reopen trajectory to resume");
   const hsize_t keep = static_cast<hsize_t>(keep_frames);
@@ -578,7 +591,7 @@ bool chunk_before(hid_t file, const char* path, hsize_t index, std::uint64_t lim
 }  // namespace
 
 H5mdReader::H5mdReader(const std::string& path) : path_(path) {
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // we report missing objects ourselves
+  hdf5_stack_as_asked();  // we report missing objects ourselves
   file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   std::uint64_t limit = 0;
   if (file_ < 0) {
@@ -862,7 +875,7 @@ void write_checkpoint(const std::string& path, const Checkpoint& c, const double
 }
 
 Checkpoint read_checkpoint(const std::string& path) {
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  hdf5_stack_as_asked();
   hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   if (f < 0) throw std::runtime_error(path + ": cannot open checkpoint");
   Checkpoint c;
@@ -937,6 +950,11 @@ void rebuild_trajectory(const std::string& path, const System& sys, const Scene&
   }
   if (std::rename(rebuilt.c_str(), path.c_str()) != 0)
     throw std::runtime_error(path + ": cannot replace with " + rebuilt + ": " + std::strerror(errno));
+}
+
+void show_library_diagnostics(bool shown) {
+  hdf5_stack_shown = shown;
+  hdf5_stack_as_asked();
 }
 
 }  // namespace pmfrag

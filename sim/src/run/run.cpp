@@ -252,7 +252,7 @@ RunResult run_dim(const Scene& scene, const System& sys, const RunOptions& opt, 
   const RunParameters rp{dt, limit, at.end, adaptive ? 0 : at.every, adaptive};
 
   const std::filesystem::path dir(opt.out_dir);
-  std::filesystem::create_directories(dir);
+  make_folder(dir);
   if (!from) start_run_folder(dir, scene, opt.force);
   const std::string traj = (dir / "trajectory.h5").string();
   if (from && !trajectory_opens_for_append(traj)) {

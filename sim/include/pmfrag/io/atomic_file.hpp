@@ -29,10 +29,19 @@ void write_file_atomically_by_name(const std::filesystem::path& path,
 /// `dir` (not its subfolders). Only for a folder whose writer holds its FolderLock: then any such file is stale.
 void remove_temporaries(const std::filesystem::path& dir);
 
+/// Makes the folder `dir` and its parents, as a place for outputs. Throws std::runtime_error in one line naming
+/// the path and the cause: "PATH: cannot make the folder: Permission denied", or, when a file holds the name,
+/// "PATH: is a file, not a folder (move it away or choose another folder)"; the file is left alone.
+void make_folder(const std::filesystem::path& dir);
+
+/// Throws the same "is a file, not a folder" error if a file holds the name `dir`; a folder or nothing passes.
+/// For outputs that replace a folder at the end (replace_directory), checked before the work starts.
+void require_folder_or_nothing(const std::filesystem::path& dir);
+
 /// A folder of many files written whole or not at all (a render's frames/): the files are written into
 /// `staged` (a sibling of `dir`), which then takes the place of `dir` in one step (renameat2 RENAME_EXCHANGE;
 /// two renames where the filesystem lacks it), and the previous content is removed. Until then `dir` is
-/// untouched. Throws std::runtime_error naming the folder and the system's reason.
+/// untouched. A file (not a folder) named `dir` is refused, not replaced. Throws std::runtime_error naming the folder and the system's reason.
 void replace_directory(const std::filesystem::path& dir, const std::filesystem::path& staged);
 
 }  // namespace pmfrag

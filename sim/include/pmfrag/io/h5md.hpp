@@ -59,6 +59,10 @@ class H5mdWriter {
   long frames_ = 0, events_ = 0;
 };
 
+/// HDF5's own error stack, printed to stderr beside pmfrag's one-line messages when `shown` (`pmfrag
+/// --verbose`); off by default.
+void show_library_diagnostics(bool shown);
+
 /// The engine's record of bond events read back: the rows that lie wholly before any damage, and for each
 /// frame how many rows belong to it and the frames before (rows_at_frame[k]: the events of steps up to frame
 /// k's). A frame whose rows are not all readable (a record cut short) has no entry: rows_at_frame is then
