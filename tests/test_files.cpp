@@ -131,6 +131,28 @@ TEST(ReplaceDirectory, TheStagedFolderTakesThePlaceOfTheOldOneWhole) {
   fs::remove_all(d);
 }
 
+TEST(MakeFolder, MakesParentsAndRefusesAFileWhereTheFolderShouldBe) {
+  const fs::path d = fresh_dir("make_folder");
+  make_folder(d / "a" / "b");
+  EXPECT_TRUE(fs::is_directory(d / "a" / "b"));
+  make_folder(d / "a" / "b");  // already there: nothing to do
+  write_file_atomically(d / "frames", std::string_view("keep"));
+  for (const fs::path& p : {d / "frames", d / "frames" / "sub"}) {
+    try {
+      make_folder(p);
+      ADD_FAILURE() << "made " << p << " through a file";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(p.string() + ": "), std::string::npos) << e.what();
+    }
+  }
+  // replace_directory refuses too, and both leave the file as it was.
+  make_folder(d / "frames.part");
+  EXPECT_THROW(replace_directory(d / "frames", d / "frames.part"), std::runtime_error);
+  EXPECT_EQ(content(d / "frames"), "keep");
+  EXPECT_TRUE(fs::is_directory(d / "frames.part"));
+  fs::remove_all(d);
+}
+
 TEST(AtomicFile, AKilledWritersTemporariesAreRemovedAndNothingElse) {
   const fs::path d = fresh_dir("stale");
   for (const char* name : {"frame_00003.vtu.tmp.4242", "summary.json", "notes.tmp.txt", "a.tmp."})
