@@ -5,6 +5,9 @@
 #include "pmfrag/io/folder_lock.hpp"
 #include "pmfrag/analysis/export_mdanalysis.hpp"
 #include "pmfrag/analysis/export_vtk.hpp"
+#include "pmfrag/analysis/fragments.hpp"
+#include "pmfrag/io/h5md.hpp"
+#include "pmfrag/render/paraview_script.hpp"
 
 #include <cstdio>
 #include <filesystem>
@@ -19,12 +22,13 @@ namespace {
 struct ExportCli {
   std::string dir, fields, criterion, compress = "lz4", format = "vtk";
   long every = 1;
-  CLI::Option *fields_opt = nullptr, *break_opt = nullptr, *compress_opt = nullptr;
+  bool paraview_script = false;
+  CLI::Option *fields_opt = nullptr, *break_opt = nullptr, *compress_opt = nullptr, *script_opt = nullptr;
 };
 
 // --format mdanalysis: the frames alone, in MDAnalysis' units (export_mdanalysis.hpp).
 void run_mdanalysis(const ExportCli& o) {
-  for (const CLI::Option* opt : {o.fields_opt, o.break_opt, o.compress_opt})
+  for (const CLI::Option* opt : {o.fields_opt, o.break_opt, o.compress_opt, o.script_opt})
     if (opt->count() > 0) throw UsageError(opt->get_name() + " applies to --format vtk only");
   if (!std::filesystem::exists(std::filesystem::path(o.dir) / "trajectory.h5"))
     throw UsageError(o.dir + ": no trajectory.h5 (run `pmfrag run SCENE --out DIR` first)");
@@ -64,6 +68,16 @@ void run(const ExportCli& o) {
   std::printf("exported %ld of %ld frames to %s/vtk/ and %s/particles.pvd%s\n", r.frames_written, r.frames_read,
               o.dir.c_str(), o.dir.c_str(), r.partial ? " (PARTIAL)" : "");
   if (r.partial) std::printf("note: %s\n", r.note.c_str());
+  if (o.paraview_script) {
+    if (opt.fields.size() > 0 && !opt.fields.count("fragment_id"))
+      throw UsageError("--paraview-script colours by fragment_id: add it to --fields");
+    const H5mdReader rd((std::filesystem::path(o.dir) / "trajectory.h5").string());
+    const render::View view = render::view_of_first_frame(rd.frame(0).position, rd.dim(), rd.parameter("r0"));
+    const std::filesystem::path script = std::filesystem::path(o.dir) / "particles_view.py";
+    write_file_atomically(script, render::paraview_script(view, analysis::run_title(rd, o.dir), 1024));
+    std::printf("wrote %s (paraview --script=%s, or pvpython %s --screenshot view.png)\n", script.c_str(),
+                script.c_str(), script.c_str());
+  }
 }
 
 }  // namespace
@@ -87,6 +101,9 @@ void add_export_command(CLI::App& app) {
   o->compress_opt = cmd->add_option("--compress", o->compress,
                   "Compression of the VTU data: lz4 (default, fastest to write), zlib (about 25 % smaller), none")
       ->check(CLI::IsMember({"lz4", "zlib", "none"}));
+  o->script_opt = cmd->add_flag("--paraview-script", o->paraview_script,
+                  "Also write RUN/particles_view.py: ParaView opens particles.pvd coloured by fragment_id under the "
+                  "camera of pmfrag's frames (paraview --script=..., or pvpython ... --screenshot PNG)");
   cmd->callback([o] { run(*o); });
 }
 

@@ -152,23 +152,7 @@ void run(const RenderCli& o) {
   const std::vector<double> times = rd.times();
   const TrajectoryFrame first = rd.frame(0);
 
-  render::View view;
-  view.xmin = view.ymin = 1e300;
-  view.xmax = view.ymax = -1e300;
-  for (std::size_t i = 0; dim == 2 && i < species.size(); ++i) {
-    view.xmin = std::min(view.xmin, first.position[2 * i]), view.xmax = std::max(view.xmax, first.position[2 * i]);
-    view.ymin = std::min(view.ymin, first.position[2 * i + 1]), view.ymax = std::max(view.ymax, first.position[2 * i + 1]);
-  }
-  view.radius = 0.45 * r0;
-  if (dim == 3) {
-    view.three_d = true;
-    view.zmin = 1e300, view.zmax = -1e300;
-    for (std::size_t i = 0; i < species.size(); ++i) {
-      view.xmin = std::min(view.xmin, first.position[3 * i]), view.xmax = std::max(view.xmax, first.position[3 * i]);
-      view.ymin = std::min(view.ymin, first.position[3 * i + 1]), view.ymax = std::max(view.ymax, first.position[3 * i + 1]);
-      view.zmin = std::min(view.zmin, first.position[3 * i + 2]), view.zmax = std::max(view.zmax, first.position[3 * i + 2]);
-    }
-  }
+  const render::View view = render::view_of_first_frame(first.position, dim, r0);
 
   const std::vector<std::uint8_t> target = analysis::target_particles(rd);
   const bool any_target = std::find(target.begin(), target.end(), 1) != target.end();
@@ -193,25 +177,7 @@ void run(const RenderCli& o) {
       }
     }
   }
-  std::string title;
-  {  // the scene's `title = "..."` line, if it has one
-    const std::string text = rd.scene_text();
-    std::stringstream lines(text);
-    for (std::string line; std::getline(lines, line);) {
-      const auto start = line.find_first_not_of(" \t");
-      if (start == std::string::npos || line.compare(start, 5, "title") != 0) continue;
-      const auto q1 = line.find('"'), q2 = line.rfind('"');
-      if (q1 != std::string::npos && q2 > q1) title = line.substr(q1 + 1, q2 - q1 - 1);
-      break;
-    }
-    if (title.empty()) title = o.dir;
-    // What ran is the scene file with its overrides: a title quoting "200 cm/s" must say that --set changed it.
-    const std::vector<std::string> overrides = rd.overrides();
-    if (!overrides.empty()) {
-      title += "\n--set ";
-      for (std::size_t k = 0; k < overrides.size(); ++k) title += (k ? ", " : "") + overrides[k];
-    }
-  }
+  const std::string title = analysis::run_title(rd, o.dir);
 
   render::HeadlessWindow window(o.size, o.size);
   const fs::path frames_dir = dir / "frames";

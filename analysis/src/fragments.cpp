@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <sstream>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -197,6 +198,25 @@ void write_atomically(const std::filesystem::path& path, F&& body) {
 }  // namespace
 
 void add_note(std::string& note, const std::string& more) { note += (note.empty() ? "" : "; ") + more; }
+
+std::string run_title(const H5mdReader& rd, const std::string& fallback) {
+  std::string title;
+  std::stringstream lines(rd.scene_text());
+  for (std::string line; std::getline(lines, line);) {
+    const auto start = line.find_first_not_of(" \t");
+    if (start == std::string::npos || line.compare(start, 5, "title") != 0) continue;
+    const auto q1 = line.find('"'), q2 = line.rfind('"');
+    if (q1 != std::string::npos && q2 > q1) title = line.substr(q1 + 1, q2 - q1 - 1);
+    break;
+  }
+  if (title.empty()) title = fallback;
+  const std::vector<std::string> overrides = rd.overrides();
+  if (!overrides.empty()) {
+    title += "\n--set ";
+    for (std::size_t k = 0; k < overrides.size(); ++k) title += (k ? ", " : "") + overrides[k];
+  }
+  return title;
+}
 
 std::string trajectory_caveats(const H5mdReader& rd) {
   std::string note;

@@ -36,11 +36,6 @@ namespace pmfrag::render {
 
 namespace {
 
-// Okabe-Ito: distinguishable with the common colour-vision deficiencies.
-const double palette[8][3] = {{0.902, 0.624, 0.000}, {0.337, 0.706, 0.914}, {0.000, 0.620, 0.451},
-                              {0.941, 0.894, 0.259}, {0.000, 0.447, 0.698}, {0.835, 0.369, 0.000},
-                              {0.800, 0.475, 0.655}, {0.600, 0.600, 0.600}};
-
 // Each splat drawn as a flat disc with a darker rim, so touching particles stay distinct (and flat colours
 // keep PNGs small).
 const char* disc_shader =
@@ -53,9 +48,10 @@ vtkNew<vtkLookupTable> make_lut(const FieldSpec& f) {
   vtkNew<vtkLookupTable> lut;
   if (f.categorical) {
     lut->SetNumberOfTableValues(8);
+    const auto& palette = detail::category_palette;
     for (int k = 0; k < 8; ++k) lut->SetTableValue(k, palette[k][0], palette[k][1], palette[k][2], 1.0);
     lut->SetTableRange(0, 7);
-    lut->SetNanColor(0.88, 0.88, 0.88, 1.0);  // particles that belong to no category (targets held in place)
+    lut->SetNanColor(detail::no_category[0], detail::no_category[1], detail::no_category[2], 1.0);
   } else {
     const auto& anchors = detail::ramp_anchors;
     lut->SetNumberOfTableValues(256);
@@ -124,6 +120,48 @@ vtkSmartPointer<vtkActor> segment_actor(const FramePicture& pic, const View& vie
 
 }  // namespace
 
+View view_of_first_frame(const std::vector<double>& position, int dim, double r0) {
+  View view;
+  view.three_d = dim == 3;
+  view.radius = 0.45 * r0;
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+  const std::size_t d = static_cast<std::size_t>(dim);
+  for (std::size_t i = 0; i + d <= position.size(); i += d)
+    for (std::size_t a = 0; a < d; ++a) lo[a] = std::min(lo[a], position[i + a]), hi[a] = std::max(hi[a], position[i + a]);
+  view.xmin = lo[0], view.xmax = hi[0], view.ymin = lo[1], view.ymax = hi[1];
+  if (view.three_d) view.zmin = lo[2], view.zmax = hi[2];
+  return view;
+}
+
+CameraPose camera_pose(const View& view, double aspect) {
+  CameraPose pose;
+  const double cx = 0.5 * (view.xmin + view.xmax), cy = 0.5 * (view.ymin + view.ymax);
+  if (view.three_d) {
+    // Perspective from the front-right, above: the whole box in view.
+    const double cz = 0.5 * (view.zmin + view.zmax);
+    const double radius = 0.5 * std::sqrt(std::pow(view.xmax - view.xmin, 2) + std::pow(view.ymax - view.ymin, 2) +
+                                          std::pow(view.zmax - view.zmin, 2));
+    const double dir[3] = {0.55, -0.62, 0.56};  // unit length
+    // The view angle is vertical: a panel narrower than tall needs the camera further back.
+    const double dist = 1.15 * radius / std::sin(0.5 * pose.view_angle_deg * 3.14159265358979 / 180.0) / std::min(1.0, aspect);
+    for (int a = 0; a < 3; ++a) pose.focal_point[a] = (a == 0 ? cx : a == 1 ? cy : cz);
+    for (int a = 0; a < 3; ++a) pose.position[a] = pose.focal_point[a] + dist * dir[a];
+    pose.view_up[0] = 0, pose.view_up[1] = 0, pose.view_up[2] = 1;
+    pose.near = 0.1 * dist, pose.far = 3.0 * dist;
+    return pose;
+  }
+  // The initial body with a margin; a wider one at the top leaves room for the time label above a stretched body.
+  const double hw = 0.5 * (view.xmax - view.xmin), hh = 0.5 * (view.ymax - view.ymin);
+  pose.parallel = true;
+  pose.parallel_scale = 1.2 * std::max(hh, hw / aspect) + view.radius;
+  const double fy = cy + 0.04 * pose.parallel_scale;
+  pose.focal_point[0] = cx, pose.focal_point[1] = fy, pose.focal_point[2] = 0.0;
+  pose.position[0] = cx, pose.position[1] = fy, pose.position[2] = 100.0;
+  pose.view_up[0] = 0, pose.view_up[1] = 1, pose.view_up[2] = 0;
+  pose.near = 1.0, pose.far = 200.0;
+  return pose;
+}
+
 void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, const std::vector<FramePicture>& pics,
                 const std::string& title, int panel_w, int panel_h, const std::string& png_path, int compression,
                 PngQueue* queue) {
@@ -182,36 +220,17 @@ void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, co
     ren->AddActor(actor);
     if (!pic.segments.empty()) ren->AddActor(segment_actor(pic, view));
 
-    // Camera fixed to the initial body (with a margin), the same for every frame of a sequence.
     const double cx = 0.5 * (view.xmin + view.xmax), cy = 0.5 * (view.ymin + view.ymax);
-    const double hw_ = 0.5 * (view.xmax - view.xmin), hh = 0.5 * (view.ymax - view.ymin);
     const double aspect = static_cast<double>(panel_w) / panel_h;
+    const CameraPose pose = camera_pose(view, aspect);
     vtkCamera* cam = ren->GetActiveCamera();
-    if (view.three_d) {
-      // Perspective from the front-right, above: the whole box in view, the same camera for every frame.
-      const double cz = 0.5 * (view.zmin + view.zmax);
-      const double radius = 0.5 * std::sqrt(std::pow(view.xmax - view.xmin, 2) + std::pow(view.ymax - view.ymin, 2) +
-                                            std::pow(view.zmax - view.zmin, 2));
-      const double dir[3] = {0.55, -0.62, 0.56};  // unit length
-      // The view angle is vertical: a panel narrower than tall needs the camera further back.
-      const double dist = 1.15 * radius / std::sin(0.5 * 30.0 * 3.14159265358979 / 180.0) / std::min(1.0, aspect);
-      cam->ParallelProjectionOff();
-      cam->SetViewAngle(30.0);
-      cam->SetFocalPoint(cx, cy, cz);
-      cam->SetPosition(cx + dist * dir[0], cy + dist * dir[1], cz + dist * dir[2]);
-      cam->SetViewUp(0, 0, 1);
-      cam->SetClippingRange(0.1 * dist, 3.0 * dist);
-    }
-    if (!view.three_d) cam->ParallelProjectionOn();
-    // A wider margin at the top leaves room for the time label above a stretched body.
-    const double scale0 = 1.2 * std::max(hh, hw_ / aspect) + view.radius;
-    if (!view.three_d) {
-      cam->SetFocalPoint(cx, cy + 0.04 * scale0, 0.0);
-      cam->SetPosition(cx, cy + 0.04 * scale0, 100.0);
-      cam->SetViewUp(0, 1, 0);
-      cam->SetParallelScale(scale0);
-      cam->SetClippingRange(1.0, 200.0);
-    }
+    cam->SetParallelProjection(pose.parallel);
+    if (pose.parallel) cam->SetParallelScale(pose.parallel_scale);
+    else cam->SetViewAngle(pose.view_angle_deg);
+    cam->SetFocalPoint(pose.focal_point);
+    cam->SetPosition(pose.position);
+    cam->SetViewUp(pose.view_up);
+    cam->SetClippingRange(pose.near, pose.far);
 
     // Time label and caption.
     vtkNew<vtkTextActor> label;

@@ -140,6 +140,9 @@ std::string trajectory_caveats(const H5mdReader& trajectory);
 /// wall or plate held in place). Targets are boundaries, not material under study: the statistics leave them
 /// out and pictures draw them grey.
 std::vector<std::uint8_t> target_particles(const H5mdReader& trajectory);
+/// What a picture of the run is titled: the scene's `title = "..."` (else `fallback`), and on a second line the
+/// --set overrides that ran, since a title quoting "200 cm/s" is wrong once --set changed the speed.
+std::string run_title(const H5mdReader& trajectory, const std::string& fallback);
 /// Appends `more` to a note, "; "-separated.
 void add_note(std::string& note, const std::string& more);
 

@@ -27,6 +27,21 @@ struct View {
   double zmin = 0, zmax = 0;
 };
 
+/// The box a sequence is framed on: the particles of its first frame (`dim` coordinates each [cm]), drawn with
+/// discs of 0.45 r0.
+View view_of_first_frame(const std::vector<double>& position, int dim, double r0);
+
+/// Where the camera of a panel stands, the same for every frame of a sequence: what render_png uses, and what
+/// `pmfrag export --paraview-script` hands to ParaView. `aspect` is the panel's width over its height.
+struct CameraPose {
+  double position[3], focal_point[3], view_up[3];  ///< cm
+  bool parallel = false;        ///< 2-D: orthographic, looking down z
+  double parallel_scale = 1.0;  ///< half the panel's height [cm] (parallel only)
+  double view_angle_deg = 30.0;  ///< vertical (perspective only)
+  double near = 0.1, far = 200.0;  ///< clipping range [cm]
+};
+CameraPose camera_pose(const View& view, double aspect);
+
 /// What a line overlay is: an intact bond (dark grey), a broken bond (red), a displacement vector (black).
 enum class SegmentKind : unsigned char { intact_bond, broken_bond, vector };
 
