@@ -2,6 +2,7 @@
 
 #include "pmfrag/step/effects.hpp"
 #include "pmfrag/body/system.hpp"
+#include "pmfrag/io/lammps.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -18,32 +19,10 @@ struct SceneCli {
   std::vector<std::string> set;
 };
 
-// LAMMPS "bond" data file: atom types 1 = free, 2 = kinematic (any [[kinematic]] selection, in order 2, 3, ...).
+// LAMMPS data (io/lammps.hpp), and the law and step at full precision beside it for bench/lammps_inputs.py
+// (rounded G, H leave F(r0) != 0 and a prestressed lattice).
 void write_lammps(const std::string& path, const Scene& sc, const System& sys) {
-  std::vector<int> type(sys.size(), 1);
-  for (std::size_t k = 0; k < sc.kinematic.size(); ++k)
-    for (int i : select_particles(sys, sc.kinematic[k].select, "kinematic")) type[static_cast<std::size_t>(i)] = static_cast<int>(k) + 2;
-  Vec3 lo = sys.position.front(), hi = lo;
-  for (const auto& x : sys.position) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
-  const double pad = 5.0;
-  std::ofstream f(path);
-  if (!f) throw std::runtime_error(path + ": cannot write");
-  f.precision(17);
-  f << "# pmfrag scene " << sc.file << " (" << sys.size() << " particles, " << sys.bonds.size() << " bonds)\n\n";
-  f << sys.size() << " atoms\n" << sys.bonds.size() << " bonds\n" << sc.kinematic.size() + 1 << " atom types\n1 bond types\n\n";
-  f << lo.x() - pad << " " << hi.x() + pad << " xlo xhi\n" << lo.y() - pad << " " << hi.y() + pad << " ylo yhi\n";
-  if (sys.dim == 3)
-    f << lo.z() - pad << " " << hi.z() + pad << " zlo zhi\n";
-  else
-    f << "-0.5 0.5 zlo zhi\n";
-  f << "\nMasses\n\n";
-  for (std::size_t t = 1; t <= sc.kinematic.size() + 1; ++t) f << t << " " << sys.phase_mass.front() << "\n";
-  f << "\nAtoms # bond\n\n";
-  for (std::size_t i = 0; i < sys.size(); ++i)
-    f << i + 1 << " 1 " << type[i] << " " << sys.position[i].x() << " " << sys.position[i].y() << " " << sys.position[i].z() << "\n";
-  f << "\nBonds\n\n";
-  for (std::size_t b = 0; b < sys.bonds.size(); ++b) f << b + 1 << " 1 " << sys.bonds[b][0] + 1 << " " << sys.bonds[b][1] + 1 << "\n";
-  // The law and step at full precision beside it (rounded G, H leave F(r0) != 0 and a prestressed lattice).
+  write_lammps_data(path, sc, sys);
   std::ofstream par(path + ".params");
   par.precision(17);
   const PairLaw& law = sys.laws.front();

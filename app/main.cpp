@@ -1,6 +1,7 @@
 // pmfrag: particle modeling of dynamic fracture and fragmentation. This file only wires subcommands.
 #include "cmd_export.hpp"
 #include "cmd_fragments.hpp"
+#include "cmd_lammps.hpp"
 #include "cmd_material.hpp"
 #include "cmd_render.hpp"
 #include "cmd_run.hpp"
@@ -32,6 +33,7 @@ int main(int argc, char** argv) {
   pmfrag::app::add_material_command(app);
   pmfrag::app::add_run_command(app);
   pmfrag::app::add_scene_command(app);
+  pmfrag::app::add_lammps_command(app);
   pmfrag::app::add_fragments_command(app);
   pmfrag::app::add_export_command(app);
   pmfrag::app::add_render_command(app);

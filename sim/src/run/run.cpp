@@ -51,21 +51,6 @@ Schedule schedule_of(const Scene& scene, double dt) {
   return c;
 }
 
-// A new run's folder: refuses to overwrite a trajectory without --force, clears the old run's record and
-// checkpoint, and keeps the scene as read and its overrides beside the trajectory (--resume needs nothing else).
-void start_run_folder(const std::filesystem::path& dir, const Scene& scene, bool force) {
-  namespace fs = std::filesystem;
-  const fs::path traj = dir / "trajectory.h5";
-  if (fs::exists(traj) && !force)
-    throw std::runtime_error(traj.string() + " exists; use --force to overwrite it or --resume to continue it");
-  fs::remove(dir / "run.json");
-  fs::remove(dir / "checkpoint.h5");
-  write_file_atomically(dir / "scene.toml", [&](std::ostream& s) { s << scene.source; });
-  write_file_atomically(dir / "overrides.txt", [&](std::ostream& ov) {
-    ov << "# source: " << scene.file << "\n";
-    for (const auto& o : scene.overrides) ov << o << "\n";
-  });
-}
 
 // What a run writes as it goes: frames, the bond events before each, and checkpoints.
 template <int D>
@@ -456,6 +441,38 @@ RunResult resume_run(const RunOptions& opt) {
     r.message = "already finished: " + traj.string() + " is complete";
     return r;
   }
+  const Scene scene = read_folder_scene(dir);
+  RunOptions o = opt;
+  if (!fs::exists(ckpt)) {
+    if (o.log) o.log("no checkpoint in " + dir.string() + ": starting over");
+    o.force = true;
+    return start_run(scene, o, false, started);
+  }
+  const Checkpoint c = read_checkpoint(ckpt.string());
+  const System sys = build_system(scene);
+  const StepChoice choice = choose_step(scene, sys);
+  if (scene.dim == 2) return run_dim<2>(scene, sys, o, choice, &c, started);
+  return run_dim<3>(scene, sys, o, choice, &c, started);
+}
+
+// A new run's folder: refuses to overwrite a trajectory without --force, clears the old run's record and
+// checkpoint, and keeps the scene as read and its overrides beside the trajectory (--resume needs nothing else).
+void start_run_folder(const std::filesystem::path& dir, const Scene& scene, bool force) {
+  namespace fs = std::filesystem;
+  const fs::path traj = dir / "trajectory.h5";
+  if (fs::exists(traj) && !force)
+    throw std::runtime_error(traj.string() + " exists; use --force to overwrite it or --resume to continue it");
+  fs::remove(dir / "run.json");
+  fs::remove(dir / "checkpoint.h5");
+  write_file_atomically(dir / "scene.toml", [&](std::ostream& s) { s << scene.source; });
+  write_file_atomically(dir / "overrides.txt", [&](std::ostream& ov) {
+    ov << "# source: " << scene.file << "\n";
+    for (const auto& o : scene.overrides) ov << o << "\n";
+  });
+}
+
+Scene read_folder_scene(const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
   if (!fs::exists(dir / "scene.toml") || !fs::exists(dir / "overrides.txt"))
     throw std::runtime_error(dir.string() + " has no scene.toml/overrides.txt: not a pmfrag run folder");
   std::string file;
@@ -471,18 +488,7 @@ RunResult resume_run(const RunOptions& opt) {
   }
   std::ifstream in(dir / "scene.toml");
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const Scene scene = parse_scene(text, file, overrides);
-  RunOptions o = opt;
-  if (!fs::exists(ckpt)) {
-    if (o.log) o.log("no checkpoint in " + dir.string() + ": starting over");
-    o.force = true;
-    return start_run(scene, o, false, started);
-  }
-  const Checkpoint c = read_checkpoint(ckpt.string());
-  const System sys = build_system(scene);
-  const StepChoice choice = choose_step(scene, sys);
-  if (scene.dim == 2) return run_dim<2>(scene, sys, o, choice, &c, started);
-  return run_dim<3>(scene, sys, o, choice, &c, started);
+  return parse_scene(text, file, overrides);
 }
 
 }  // namespace pmfrag

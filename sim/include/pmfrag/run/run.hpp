@@ -6,6 +6,7 @@
 #include "pmfrag/threads/threads.hpp"
 
 #include <functional>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -74,5 +75,11 @@ void request_stop() noexcept;
 /// the trajectory). Killed before the first checkpoint: starts over. Already finished: says so in
 /// RunResult::message and does nothing.
 RunResult resume_run(const RunOptions& options);
+
+/// A new run's folder: refuses to overwrite a trajectory without `force`, clears the old run's record and
+/// checkpoint, and keeps the scene as read and its overrides beside the trajectory (scene.toml, overrides.txt).
+void start_run_folder(const std::filesystem::path& dir, const Scene& scene, bool force);
+/// The scene a run folder (or a LAMMPS deck) keeps: scene.toml with the overrides of overrides.txt.
+Scene read_folder_scene(const std::filesystem::path& dir);
 
 }  // namespace pmfrag
