@@ -2,6 +2,7 @@
 
 #include "pmfrag/io/atomic_file.hpp"
 
+#include <charconv>
 #include <cmath>
 #include <sstream>
 
@@ -38,6 +39,12 @@ Mie mie_of(const PairLaw& law) {
   m.sigma = std::pow(law.H * gA / (law.G * gR), 1.0 / (law.q - law.p));
   m.eps = law.G / (gA * C * std::pow(m.sigma, gA));
   return m;
+}
+
+// The shortest text that reads back as the same double (in.lammps stays readable and exact).
+std::string num(double v) {
+  char buf[32];
+  return std::string(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
 }
 
 }  // namespace
@@ -129,12 +136,11 @@ LammpsDeck write_lammps_deck(const Scene& scene, const System& sys, const fs::pa
   const Mie mie = mie_of(law);
   const double skin = 0.3 * sys.r0;
   std::ostringstream in;
-  in.precision(17);
   in << "# " << scene.file << (scene.title.empty() ? "" : ": " + scene.title) << "\n"
      << "# Written by `pmfrag lammps`. Run: cd THIS_FOLDER && mpirun -np N lmp -in in.lammps\n"
      << "# Then: pmfrag import THIS_FOLDER --out RUN (fragments, export, render and the studies read RUN).\n"
-     << "# (p,q) = (" << law.p << "," << law.q << "), G = " << law.G << " dyne cm^p, H = " << law.H << " dyne cm^q, r0 = "
-     << sys.r0 << " cm, D = " << sys.cutoff << " cm, " << (bonded ? "bonded" : "cutoff") << " reading\n\n"
+     << "# (p,q) = (" << law.p << "," << law.q << "), G = " << num(law.G) << " dyne cm^p, H = " << num(law.H) << " dyne cm^q, r0 = "
+     << num(sys.r0) << " cm, D = " << num(sys.cutoff) << " cm, " << (bonded ? "bonded" : "cutoff") << " reading\n\n"
      << "units cgs\ndimension " << sys.dim << "\nboundary s s " << (sys.dim == 2 ? "p" : "s") << "\natom_style bond\n"
      << "read_data data.lammps\n\n";
   if (bonded) {
@@ -142,31 +148,32 @@ LammpsDeck write_lammps_deck(const Scene& scene, const System& sys, const fs::pa
        << "# repel within r0 through the same law, as pmfrag's contacts.\n"
        << "bond_style table linear " << bond_table_rows << "\nbond_coeff 1 bond.table PQ\n";
     if (pair.contact)
-      in << "pair_style mie/cut " << sys.r0 << "\npair_coeff * * " << mie.eps << " " << mie.sigma << " " << mie.gR << " " << mie.gA << "\n";
+      in << "pair_style mie/cut " << num(sys.r0) << "\npair_coeff * * " << num(mie.eps) << " " << num(mie.sigma) << " " << mie.gR << " " << mie.gA << "\n";
     else
-      in << "pair_style zero " << sys.r0 << "\npair_coeff * *\n";
+      in << "pair_style zero " << num(sys.r0) << "\npair_coeff * *\n";
     in << "special_bonds lj 0 1 1\n"
-       << "# A bond's ends may be D apart: every process keeps ghosts that far.\n"
-       << "comm_modify cutoff " << sys.cutoff + skin << "\n"
-       << "fix break all bond/break 1 1 " << sys.cutoff << "\n";
+       << "# fix bond/break rewrites the special lists of a broken bond's 1-3 and 1-4 neighbours, up to three bonds\n"
+       << "# (3 D) away: every process keeps ghosts that far.\n"
+       << "comm_modify cutoff " << num(3.0 * sys.cutoff + skin) << "\n"
+       << "fix break all bond/break 1 1 " << num(sys.cutoff) << "\n";
   } else {
     in << "# Every pair within D interacts through the law (mie/cut with these eps, sigma, exponents).\n"
-       << "pair_style mie/cut " << sys.cutoff << "\npair_coeff * * " << mie.eps << " " << mie.sigma << " " << mie.gR << " "
+       << "pair_style mie/cut " << num(sys.cutoff) << "\npair_coeff * * " << num(mie.eps) << " " << num(mie.sigma) << " " << mie.gR << " "
        << mie.gA << "\n";
   }
-  in << "neighbor " << skin << " bin\nneigh_modify every 1 delay 0 check yes\n\n";
+  in << "neighbor " << num(skin) << " bin\nneigh_modify every 1 delay 0 check yes\n\n";
   for (std::size_t k = 0; k < scene.kinematic.size(); ++k) {
     const KinematicSpec& kin = scene.kinematic[k];
     const std::string g = "kinematic_" + std::to_string(k + 1);
     in << "# [[kinematic]] " << k + 1 << ": " << kin.select.describe() << ", moved at constant velocity [cm/s]\n"
        << "group " << g << " type " << k + 2 << "\n"
-       << "velocity " << g << " set " << kin.velocity.x() << " " << kin.velocity.y() << " " << kin.velocity.z() << "\n"
+       << "velocity " << g << " set " << num(kin.velocity.x()) << " " << num(kin.velocity.y()) << " " << num(kin.velocity.z()) << "\n"
        << "fix hold_" << k + 1 << " " << g << " setforce 0 0 0\n";
   }
   in << "fix move all nve\n";
   if (sys.dim == 2) in << "fix flat all enforce2d\n";
-  in << "timestep " << deck.dt << "\n\n"
-     << "# A frame every " << deck.frame_every << " steps (output.every = " << scene.output.every << " s).\n"
+  in << "timestep " << num(deck.dt) << "\n\n"
+     << "# A frame every " << deck.frame_every << " steps (output.every = " << num(scene.output.every) << " s).\n"
      << "dump frames all custom " << deck.frame_every << " frames.dump id x y z vx vy vz\n"
      << "dump_modify frames sort id format float %.17g\n";
   if (bonded)

@@ -263,8 +263,8 @@ LammpsImport import_lammps_run(const fs::path& deck, const fs::path& out, bool f
       res.note = frames_path.filename().string() + " ends inside the frame at step " + std::to_string(cut->step);
     if (res.last_step + every <= res.steps) {  // LAMMPS dumps every `every` steps, from step 0
       res.partial = true;
-      const std::string why = "the LAMMPS run reached step " + std::to_string(res.last_step) + " of " +
-                              std::to_string(res.steps) + (res.note.empty() ? "" : " (" + res.note + ")");
+      const std::string why = "stopped at step " + std::to_string(res.last_step) + " of " + std::to_string(res.steps) +
+                              " in LAMMPS" + (res.note.empty() ? "" : " (" + res.note + ")");
       res.note = why;
       writer.mark_incomplete(why);
     }
