@@ -72,7 +72,7 @@ void run(const ExportCli& o) {
     if (opt.fields.size() > 0 && !opt.fields.count("fragment_id"))
       throw UsageError("--paraview-script colours by fragment_id: add it to --fields");
     const H5mdReader rd((std::filesystem::path(o.dir) / "trajectory.h5").string());
-    const render::View view = render::view_of_first_frame(rd.frame(0).position, rd.dim(), rd.parameter("r0"));
+    const render::View view = render::view_of(rd.frame(0).position, rd.dim(), rd.parameter("r0"));
     const std::filesystem::path script = std::filesystem::path(o.dir) / "particles_view.py";
     write_file_atomically(script, render::paraview_script(view, analysis::run_title(rd, o.dir), 1024));
     std::printf("wrote %s (paraview --script=%s, or pvpython %s --screenshot view.png)\n", script.c_str(),

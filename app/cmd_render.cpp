@@ -26,7 +26,7 @@ namespace pmfrag::app {
 namespace {
 
 struct RenderCli {
-  std::string dir, field = "fragment_id", panel, out, cut;
+  std::string dir, field = "fragment_id", panel, out, cut, camera = "fixed";
   long every = 1;
   int size = 1024;
   double fps = 12.0, vectors = 0.0;
@@ -152,7 +152,11 @@ void run(const RenderCli& o) {
   const std::vector<double> times = rd.times();
   const TrajectoryFrame first = rd.frame(0);
 
-  const render::View view = render::view_of_first_frame(first.position, dim, r0);
+  // --camera fixed frames the first frame's body for the whole sequence (a crack grows in a still picture);
+  // follow frames each frame's particles, so bodies that move (an impactor, fragments in flight) stay in view.
+  const bool follow = o.camera == "follow";
+  render::View view = render::view_of(first.position, dim, r0);
+  render::View panel_view = view;
 
   const std::vector<std::uint8_t> target = analysis::target_particles(rd);
   const bool any_target = std::find(target.begin(), target.end(), 1) != target.end();
@@ -237,6 +241,10 @@ void run(const RenderCli& o) {
       for (std::size_t i = 0; i < values.size(); ++i)
         if (target[i]) values[i] = std::numeric_limits<double>::quiet_NaN();
     auto pic = picture(f, values, dim, cut_axis, cut_at, first, overlay);
+    if (follow) {
+      view = render::view_of(f.position, dim, r0);
+      if (in_panel) panel_view = render::enclose(panel_view, view);
+    }
     if (want_frame) {
       char name[32];
       std::snprintf(name, sizeof name, "frame_%05ld.png", k);
@@ -270,9 +278,9 @@ void run(const RenderCli& o) {
     for (std::size_t j = 0; j < panel.size(); ++j) panel[j].caption = std::string("(") + letters[j % 26] + ")";
     const std::string out = o.out.empty() ? (dir / "panel.png").string() : o.out;
     const int w = o.size / 2;
-    const double aspect = (view.ymax - view.ymin) / std::max(1e-9, view.xmax - view.xmin);
+    const double aspect = (panel_view.ymax - panel_view.ymin) / std::max(1e-9, panel_view.xmax - panel_view.xmin);
     const int h = static_cast<int>(w * std::clamp(aspect, 0.5, 2.0));
-    render::render_png(window, view, spec, panel, title, w, h, out, 9);
+    render::render_png(window, panel_view, spec, panel, title, w, h, out, 9);
     std::printf("wrote the %zu-panel figure %s\n", panel.size(), out.c_str());
   }
 }
@@ -296,6 +304,10 @@ void add_render_command(CLI::App& app) {
       ->type_name("SCALE");
   cmd->add_flag("--movie", o->movie, "Also encode the frames as RUN_DIR/crack.mp4 and crack.gif (needs ffmpeg)");
   cmd->add_option("--fps", o->fps, "Movie frame rate (default 12)")->check(CLI::Range(0.1, 120.0));
+  cmd->add_option("--camera", o->camera,
+                  "fixed (default): framed on the first frame's body, the same for every frame; follow: framed on "
+                  "each frame's particles, so moving bodies stay in view (a panel then frames all of its times)")
+      ->check(CLI::IsMember({"fixed", "follow"}));
   cmd->add_option("--cut", o->cut, "Show only particles with initial x, y or z at most VALUE cm, e.g. --cut z=1.5 "
                                    "(3-D: look inside the block)");
   cmd->callback([o] { run(*o); });

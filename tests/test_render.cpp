@@ -296,3 +296,63 @@ TEST(Render, ParticlesOfNoCategoryArePaleGrey) {
   EXPECT_GT(orange, 200) << "fragment 0 lost its colour";
   std::filesystem::remove_all(dir);
 }
+
+TEST(Render, ThreeDimensionalParticlesAreShadedSpheresDimmedWithDistance) {
+  // Two particles of one colour, one at the near corner of the box and one at the far corner: each is lit as a
+  // sphere (its upper-left side brighter than its lower-right), and the far one is darker as a whole.
+  const auto dir = test::temp_dir("render_spheres");
+  render::HeadlessWindow window(400, 400);
+  render::View view;
+  view.three_d = true;
+  view.xmin = view.ymin = view.zmin = 0.0;
+  view.xmax = view.ymax = view.zmax = 4.0;
+  view.radius = 0.6;
+  render::FieldSpec field;
+  field.categorical = true;
+  field.title = "fragment";
+  render::FramePicture pic;
+  pic.xyz = {4.0, 0.0, 4.0, 0.0, 4.0, 0.0};  // near (the camera looks from +x, -y, +z), far
+  pic.value = {0.0, 0.0};
+  const std::string png = (dir / "spheres.png").string();
+  render::render_png(window, view, field, {pic}, "", 400, 400, png);
+  const Image im = read_png(png);
+  // Each sphere's pixels, found as the non-white pixels of the panel nearer to its projected centre.
+  struct Blob {
+    double sum = 0, n = 0, x = 0, y = 0;
+    std::vector<std::array<int, 3>> px;  // x, y, brightness
+  } blob[2];
+  for (int x = 0; x < 400; ++x)
+    for (int y = 0; y < im.h; ++y) {
+      const auto c = im.at(x, y);
+      if (white(c) || c[0] < c[2]) continue;  // background, text
+      const int b = c[0] + c[1] + c[2];
+      Blob& s = blob[x + y < 400 ? 1 : 0];  // the near particle projects lower right, the far one upper left
+      s.sum += b, s.n += 1, s.x += x, s.y += y;
+      s.px.push_back({x, y, b});
+    }
+  ASSERT_GT(blob[0].n, 50);
+  ASSERT_GT(blob[1].n, 20);
+  EXPECT_LT(blob[1].sum / blob[1].n, 0.9 * blob[0].sum / blob[0].n) << "the far particle is not dimmer";
+  const Blob& near = blob[0];
+  const double cx = near.x / near.n, cy = near.y / near.n;
+  double upper_left = 0, lower_right = 0, nu = 0, nl = 0;
+  for (const auto& p : near.px) {
+    if (p[0] < cx && p[1] > cy) upper_left += p[2], ++nu;  // y counts from the bottom
+    if (p[0] > cx && p[1] < cy) lower_right += p[2], ++nl;
+  }
+  EXPECT_GT(upper_left / nu, 1.2 * lower_right / nl) << "the sphere is flat, not lit from the upper left";
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Render, AViewFollowsTheParticlesAndEnclosesTwoFrames) {
+  const std::vector<double> before = {0.0, 0.0, 1.0, 1.0}, after = {10.0, 0.0, 11.0, 2.0};  // 2-D, moved by 10 cm
+  const render::View a = render::view_of(before, 2, 0.2), b = render::view_of(after, 2, 0.2);
+  EXPECT_DOUBLE_EQ(b.xmin, 10.0);
+  EXPECT_DOUBLE_EQ(b.ymax, 2.0);
+  EXPECT_DOUBLE_EQ(b.radius, 0.45 * 0.2);
+  EXPECT_NEAR(render::camera_pose(b, 1.0).focal_point[0] - render::camera_pose(a, 1.0).focal_point[0], 10.0, 1e-12);
+  const render::View both = render::enclose(a, b);
+  EXPECT_DOUBLE_EQ(both.xmin, 0.0);
+  EXPECT_DOUBLE_EQ(both.xmax, 11.0);
+  EXPECT_DOUBLE_EQ(both.ymax, 2.0);
+}

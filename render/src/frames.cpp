@@ -44,6 +44,19 @@ const char* disc_shader =
     "if (rr > 1.0) { discard; }\n"
     "if (rr > 0.64) { ambientColor *= 0.6; diffuseColor *= 0.6; }\n";
 
+// 3-D: each splat shaded as the sphere it stands for (a light from the upper left, behind the viewer, and a
+// highlight), so the body's faces, edges and the cut read as surfaces rather than flat discs.
+const char* sphere_shader =
+    "//VTK::Color::Impl\n"
+    "float rr = dot(offsetVCVSOutput.xy, offsetVCVSOutput.xy);\n"
+    "if (rr > 1.0) { discard; }\n"
+    "vec3 nrm = vec3(offsetVCVSOutput.xy, sqrt(1.0 - rr));\n"
+    "vec3 lit = normalize(vec3(-0.45, 0.55, 0.70));\n"
+    "float lambert = max(dot(nrm, lit), 0.0);\n"
+    "float shine = pow(max(dot(nrm, normalize(lit + vec3(0.0, 0.0, 1.0))), 0.0), 48.0);\n"
+    "ambientColor = ambientColor * (0.28 + 0.72 * lambert) + vec3(0.28 * shine);\n"
+    "diffuseColor = vec3(0.0);\n";
+
 vtkNew<vtkLookupTable> make_lut(const FieldSpec& f) {
   vtkNew<vtkLookupTable> lut;
   if (f.categorical) {
@@ -120,7 +133,7 @@ vtkSmartPointer<vtkActor> segment_actor(const FramePicture& pic, const View& vie
 
 }  // namespace
 
-View view_of_first_frame(const std::vector<double>& position, int dim, double r0) {
+View view_of(const std::vector<double>& position, int dim, double r0) {
   View view;
   view.three_d = dim == 3;
   view.radius = 0.45 * r0;
@@ -131,6 +144,14 @@ View view_of_first_frame(const std::vector<double>& position, int dim, double r0
   view.xmin = lo[0], view.xmax = hi[0], view.ymin = lo[1], view.ymax = hi[1];
   if (view.three_d) view.zmin = lo[2], view.zmax = hi[2];
   return view;
+}
+
+View enclose(const View& a, const View& b) {
+  View v = a;
+  v.xmin = std::min(a.xmin, b.xmin), v.xmax = std::max(a.xmax, b.xmax);
+  v.ymin = std::min(a.ymin, b.ymin), v.ymax = std::max(a.ymax, b.ymax);
+  v.zmin = std::min(a.zmin, b.zmin), v.zmax = std::max(a.zmax, b.zmax);
+  return v;
 }
 
 CameraPose camera_pose(const View& view, double aspect) {
@@ -165,6 +186,10 @@ CameraPose camera_pose(const View& view, double aspect) {
 void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, const std::vector<FramePicture>& pics,
                 const std::string& title, int panel_w, int panel_h, const std::string& png_path, int compression,
                 PngQueue* queue) {
+  // 3-D is drawn at twice the size and averaged down: at hundreds of thousands of particles a splat spans a
+  // pixel or two, and one sample per pixel turns the lattice into moire.
+  const int supersample = view.three_d && 2 * panel_w * static_cast<int>(pics.size()) <= 8192 && 2 * panel_h <= 8192 ? 2 : 1;
+  panel_w *= supersample, panel_h *= supersample;
   vtkGenericOpenGLRenderWindow* win = hw.window();
   const int count = static_cast<int>(pics.size());
   // A title line is 1/14 of the panel; further lines (the overrides that ran) take 3/5 of one each.
@@ -200,14 +225,38 @@ void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, co
     vtkNew<vtkPolyData> poly;
     poly->SetPoints(pts);
     poly->GetPointData()->SetScalars(val);
+    const bool depth_cue = view.three_d;
+    if (depth_cue) {
+      // Depth cue: the particles dim with their distance from the camera, by up to 40 % across the body, so
+      // near faces stand out from far ones and the crack's far face reads as far.
+      const CameraPose pose = camera_pose(view, static_cast<double>(panel_w) / panel_h);
+      std::vector<double> dist(static_cast<std::size_t>(n));
+      double dmin = 1e300, dmax = -1e300;
+      for (std::size_t i = 0; i < dist.size(); ++i) {
+        double d2 = 0.0;
+        for (int a = 0; a < 3; ++a) d2 += std::pow(pic.xyz[3 * i + static_cast<std::size_t>(a)] - pose.position[a], 2);
+        dist[i] = std::sqrt(d2), dmin = std::min(dmin, dist[i]), dmax = std::max(dmax, dist[i]);
+      }
+      vtkNew<vtkUnsignedCharArray> rgb;
+      rgb->SetNumberOfComponents(3);
+      rgb->SetNumberOfTuples(n);
+      for (vtkIdType i = 0; i < n; ++i) {
+        double c[3];
+        lut->GetColor(val->GetValue(i), c);
+        const double dim = 1.0 - 0.4 * (dist[static_cast<std::size_t>(i)] - dmin) / std::max(1e-30, dmax - dmin);
+        for (int a = 0; a < 3; ++a) rgb->SetComponent(i, a, std::round(255.0 * c[a] * dim));
+      }
+      poly->GetPointData()->SetScalars(rgb);
+    }
     vtkNew<vtkPointGaussianMapper> mapper;
     mapper->SetInputData(poly);
     mapper->SetScaleFactor(view.radius);
-    mapper->SetSplatShaderCode(disc_shader);
+    mapper->SetSplatShaderCode(view.three_d ? sphere_shader : disc_shader);
     mapper->SetTriangleScale(1.0f);  // the disc has radius 1: the default 3 sends 9x the fragments, all discarded
     mapper->SetLookupTable(lut);
     mapper->SetScalarRange(lut->GetTableRange());
     mapper->ScalarVisibilityOn();
+    if (depth_cue) mapper->SetColorModeToDirectScalars();
     mapper->EmissiveOff();
     vtkNew<vtkActor> actor;
     actor->SetMapper(mapper);
@@ -238,14 +287,17 @@ void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, co
     label->GetTextProperty()->SetFontSize(std::max(14, panel_h / 36));
     label->GetTextProperty()->SetColor(0.1, 0.1, 0.1);
     label->GetPositionCoordinate()->SetCoordinateSystemToViewport();  // relative to this panel
-    label->GetPositionCoordinate()->SetValue(12, panel_h - std::max(14, panel_h / 36) - 14);
+    label->GetPositionCoordinate()->SetValue(12 * supersample, panel_h - std::max(14, panel_h / 36) - 14 * supersample);
     ren->AddActor2D(label);
 
-    // Scale bar: 1 cm in world units, at the lower left of a 2-D view; in 3-D along the box's front-bottom
-    // edge (so perspective scales it like the body).
+    // Scale bar: 1 cm in world units, at the lower left of a 2-D view; in 3-D along x, at the height of the
+    // box's floor (so perspective scales it like the body there).
     const double scale = cam->GetParallelScale();
-    const double x0 = view.three_d ? view.xmin : cx - scale * aspect * 0.92;
-    const double y0 = view.three_d ? view.ymin - 3 * view.radius : cy + 0.04 * scale - scale * 0.94;
+    const double x0 = view.three_d ? cx - 0.5 : cx - scale * aspect * 0.92;
+    // In 3-D it lies on the floor in front of the box, clear of the body's silhouette (an eighth of the box's
+    // depth, and at least 1 cm, before its front edge).
+    const double y0 = view.three_d ? view.ymin - std::max(1.0, 0.125 * (view.ymax - view.ymin))
+                                   : cy + 0.04 * scale - scale * 0.94;
     const double z0 = view.three_d ? view.zmin : 1.0;
     vtkNew<vtkPoints> sp;
     sp->InsertNextPoint(x0, y0, z0);
@@ -309,14 +361,14 @@ void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, co
     t->GetTextProperty()->SetColor(0.1, 0.1, 0.1);
     t->GetTextProperty()->BoldOn();
     t->GetPositionCoordinate()->SetCoordinateSystemToViewport();
-    t->GetPositionCoordinate()->SetValue(14, title_line_h / 4);
+    t->GetPositionCoordinate()->SetValue(14 * supersample, title_line_h / 4);
     ren->AddActor2D(t);
     win->AddRenderer(ren);
     keep.push_back(ren);
   }
   win->Render();
 
-  detail::write_window_png(win, png_path, compression, queue);
+  detail::write_window_png(win, png_path, compression, queue, supersample);
 }
 
 }  // namespace pmfrag::render

@@ -85,6 +85,15 @@ GREY = [)py" + number(grey[0]) + ", " + number(grey[1]) + ", " + number(grey[2])
 CATEGORIES = 256
 
 
+def frame_times(reader):
+    """The collection's times [s]: ParaView gives a property holding several, or a number for one."""
+    values = reader.TimestepValues
+    try:
+        return [float(t) for t in values]
+    except TypeError:
+        return [float(values)]
+
+
 def show_run(view=None, legend=True):
     """Opens the collection in `view` (default: the active render view); returns (reader, display, view)."""
     reader = PVDReader(registrationName="pmfrag particles", FileName=COLLECTION)
@@ -97,9 +106,7 @@ def show_run(view=None, legend=True):
     lut = GetColorTransferFunction("fragment_id")
     lut.InterpretValuesAsCategories = 1
     # As many categories as the last frame has fragments (up to CATEGORIES); a legend only while it stays short.
-    last = reader.TimestepValues
-    last = last[-1] if isinstance(last, (list, tuple)) and last else last
-    reader.UpdatePipeline(last)
+    reader.UpdatePipeline(frame_times(reader)[-1])
     count = min(CATEGORIES, int(reader.PointData["fragment_id"].GetRange()[1]) + 1)
     annotations, colours = [], []
     for k in range(count):
@@ -144,8 +151,7 @@ def main(argv):
             sys.exit("particles_view.py: unknown or incomplete option " + repr(key) +
                      " (expected --screenshot PNG, --time T, --size PX, --no-legend)")
     reader, display, view = show_run(legend=legend)
-    times = reader.TimestepValues
-    times = list(times) if isinstance(times, (list, tuple)) else [times]
+    times = frame_times(reader)
     t = float(options["--time"]) if options["--time"] is not None else times[-1]
     GetAnimationScene().AnimationTime = t
     view.ViewTime = t

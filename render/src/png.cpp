@@ -7,6 +7,7 @@
 #include <vtkNew.h>
 #include <vtkRenderWindow.h>
 #include <vtkSmartPointer.h>
+#include <vtkImageShrink3D.h>
 #include <vtkWindowToImageFilter.h>
 
 #include <png.h>
@@ -126,20 +127,30 @@ void PngQueue::work() {
 
 namespace detail {
 
-void write_window_png(vtkRenderWindow* window, const std::string& png_path, int compression, PngQueue* queue) {
+void write_window_png(vtkRenderWindow* window, const std::string& png_path, int compression, PngQueue* queue,
+                      int shrink) {
   vtkNew<vtkWindowToImageFilter> grab;
   grab->SetInput(window);
   grab->SetInputBufferTypeToRGB();
   grab->ReadFrontBufferOff();
   grab->ShouldRerenderOff();
   grab->Update();
+  vtkImageData* image = grab->GetOutput();
+  vtkNew<vtkImageShrink3D> average;
+  if (shrink > 1) {
+    average->SetInputConnection(grab->GetOutputPort());
+    average->SetShrinkFactors(shrink, shrink, 1);
+    average->AveragingOn();
+    average->Update();
+    image = average->GetOutput();
+  }
   if (!queue) {
-    write_png(grab->GetOutput(), png_path, compression);
+    write_png(image, png_path, compression);
     return;
   }
   auto job = std::make_unique<PngQueue::Job>();
   job->image = vtkSmartPointer<vtkImageData>::New();
-  job->image->DeepCopy(grab->GetOutput());  // the filter's buffer is reused by the next frame
+  job->image->DeepCopy(image);  // the filters' buffers are reused by the next frame
   job->path = png_path;
   job->compression = compression;
   queue->push(std::move(job));

@@ -27,9 +27,11 @@ struct View {
   double zmin = 0, zmax = 0;
 };
 
-/// The box a sequence is framed on: the particles of its first frame (`dim` coordinates each [cm]), drawn with
-/// discs of 0.45 r0.
-View view_of_first_frame(const std::vector<double>& position, int dim, double r0);
+/// The box around a frame's particles (`dim` coordinates each [cm]), drawn with discs of 0.45 r0: a sequence
+/// is framed on its first frame's, or on each frame's (`pmfrag render --camera follow`).
+View view_of(const std::vector<double>& position, int dim, double r0);
+/// The smallest view holding both boxes (a panel of frames under a camera that follows).
+View enclose(const View& a, const View& b);
 
 /// Where the camera of a panel stands, the same for every frame of a sequence: what render_png uses, and what
 /// `pmfrag export --paraview-script` hands to ParaView. `aspect` is the panel's width over its height.
