@@ -356,3 +356,20 @@ TEST(Render, AViewFollowsTheParticlesAndEnclosesTwoFrames) {
   EXPECT_DOUBLE_EQ(both.xmax, 11.0);
   EXPECT_DOUBLE_EQ(both.ymax, 2.0);
 }
+
+TEST(Render, SplatRadiusInPixelsScalesWithTheParticleAndThePanel) {
+  // 2-D: a 10 cm square box in a square panel of 500 px shows about 50 px per cm (less the margin).
+  render::View flat = render::view_of({0.0, 0.0, 10.0, 10.0}, 2, 0.2);
+  const double px = render::splat_radius_pixels(flat, 500, 500);
+  EXPECT_GT(px, 0.7 * 0.09 * 50.0);  // the margin is 20 %
+  EXPECT_LT(px, 0.09 * 50.0 * 1.0001);
+  EXPECT_NEAR(render::splat_radius_pixels(flat, 1000, 1000), 2.0 * px, 1e-9 * px);
+  // 3-D: halving the lattice spacing halves the splat; a coarse block is not a fine lattice, a fine one is.
+  render::View block = render::view_of({0.0, 0.0, 0.0, 10.0, 10.0, 10.0}, 3, 0.2);
+  ASSERT_TRUE(block.three_d);
+  render::View finer = block;
+  finer.radius *= 0.5;
+  const double coarse_px = render::splat_radius_pixels(block, 1024, 1024);
+  EXPECT_NEAR(render::splat_radius_pixels(finer, 1024, 1024), 0.5 * coarse_px, 1e-9 * coarse_px);
+  EXPECT_GT(coarse_px, 0.0);
+}

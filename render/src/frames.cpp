@@ -183,12 +183,25 @@ CameraPose camera_pose(const View& view, double aspect) {
   return pose;
 }
 
+double splat_radius_pixels(const View& view, int panel_w, int panel_h) {
+  const CameraPose pose = camera_pose(view, static_cast<double>(panel_w) / panel_h);
+  double half_height = pose.parallel_scale;  // world units from the panel's centre to its top edge
+  if (!pose.parallel) {
+    double dist = 0.0;
+    for (int a = 0; a < 3; ++a) dist += std::pow(pose.position[a] - pose.focal_point[a], 2);
+    half_height = std::sqrt(dist) * std::tan(0.5 * pose.view_angle_deg * 3.14159265358979 / 180.0);
+  }
+  return view.radius / half_height * 0.5 * panel_h;
+}
+
 void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, const std::vector<FramePicture>& pics,
                 const std::string& title, int panel_w, int panel_h, const std::string& png_path, int compression,
                 PngQueue* queue) {
-  // 3-D is drawn at twice the size and averaged down: at hundreds of thousands of particles a splat spans a
-  // pixel or two, and one sample per pixel turns the lattice into moire.
-  const int supersample = view.three_d && 2 * panel_w * static_cast<int>(pics.size()) <= 8192 && 2 * panel_h <= 8192 ? 2 : 1;
+  // A 3-D lattice whose splats span a few pixels turns into moire with one sample per pixel: it is drawn at
+  // twice the size and averaged down. Larger splats do not need it, and it quadruples the rasterizer's work.
+  const bool fine_lattice = view.three_d && splat_radius_pixels(view, panel_w, panel_h) < 5.0;
+  const int supersample =
+      fine_lattice && 2 * panel_w * static_cast<int>(pics.size()) <= 8192 && 2 * panel_h <= 8192 ? 2 : 1;
   panel_w *= supersample, panel_h *= supersample;
   vtkGenericOpenGLRenderWindow* win = hw.window();
   const int count = static_cast<int>(pics.size());
@@ -316,11 +329,18 @@ void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, co
     bar_actor->GetProperty()->SetLineWidth(std::max(2.0, panel_h / 300.0));
     ren->AddActor(bar_actor);
     vtkNew<vtkTextActor> bar_text;
-    bar_text->SetInput("1 cm");
+    bar_text->SetInput(view.three_d ? "1 cm  " : "1 cm");
     bar_text->GetTextProperty()->SetFontSize(std::max(12, panel_h / 45));
     bar_text->GetTextProperty()->SetColor(0.1, 0.1, 0.1);
     bar_text->GetPositionCoordinate()->SetCoordinateSystemToWorld();
-    bar_text->GetPositionCoordinate()->SetValue(x0, view.three_d ? y0 - 0.5 : y0 + 0.12, z0);
+    if (view.three_d) {
+      // The bar runs down and right on the screen: its label ends where the bar starts, clear of it.
+      bar_text->GetTextProperty()->SetJustificationToRight();
+      bar_text->GetTextProperty()->SetVerticalJustificationToCentered();
+      bar_text->GetPositionCoordinate()->SetValue(x0, y0, z0);
+    } else {
+      bar_text->GetPositionCoordinate()->SetValue(x0, y0 + 0.12, z0);
+    }
     ren->AddActor2D(bar_text);
 
     win->AddRenderer(ren);
@@ -365,6 +385,12 @@ void render_png(HeadlessWindow& hw, const View& view, const FieldSpec& field, co
     ren->AddActor2D(t);
     win->AddRenderer(ren);
     keep.push_back(ren);
+    // A title wider than the figure (one narrow panel, long overrides) is set smaller rather than clipped.
+    double size[2] = {0.0, 0.0};
+    t->GetSize(ren, size);
+    const double room = width - 28.0 * supersample;
+    if (size[0] > room)
+      t->GetTextProperty()->SetFontSize(std::max(8, static_cast<int>(title_line_h / 2 * room / size[0])));
   }
   win->Render();
 

@@ -43,6 +43,9 @@ struct CameraPose {
   double near = 0.1, far = 200.0;  ///< clipping range [cm]
 };
 CameraPose camera_pose(const View& view, double aspect);
+/// A particle's radius in pixels at the camera's focal point, in a panel of this size (the choice of
+/// supersampling depends on it).
+double splat_radius_pixels(const View& view, int panel_w, int panel_h);
 
 /// What a line overlay is: an intact bond (dark grey), a broken bond (red), a displacement vector (black).
 enum class SegmentKind : unsigned char { intact_bond, broken_bond, vector };
