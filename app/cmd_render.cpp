@@ -21,6 +21,10 @@
 #include <sstream>
 #include <stdexcept>
 
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
+
 namespace pmfrag::app {
 
 namespace {
@@ -85,7 +89,18 @@ render::FramePicture picture(const TrajectoryFrame& f, const std::vector<double>
   return p;
 }
 
+// Every frame allocates and frees buffers the size of the frame (VTK's image grab, the PNG, llvmpipe's).
+// glibc gives each back to the kernel and the next frame faults it in again: a third of the plate's render
+// time went to page faults (perf). Keeping freed memory in the heap doubles the plate's frame rate.
+void keep_freed_frame_buffers() {
+#ifdef __GLIBC__
+  mallopt(M_MMAP_THRESHOLD, 256 << 20);
+  mallopt(M_TRIM_THRESHOLD, 512 << 20);
+#endif
+}
+
 void run(const RenderCli& o) {
+  keep_freed_frame_buffers();
   const std::vector<std::string> fields{"fragment_id", "displacement", "damage", "speed", "phase"};
   if (std::find(fields.begin(), fields.end(), o.field) == fields.end())
     throw UsageError("--field: expected fragment_id, displacement, damage, speed or phase (got '" + o.field + "')");
