@@ -2,40 +2,23 @@
 
 #include "pmfrag/step/effects.hpp"
 #include "pmfrag/body/system.hpp"
-#include "pmfrag/io/lammps.hpp"
 
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <memory>
-#include <stdexcept>
 
 namespace pmfrag::app {
 
 namespace {
 
 struct SceneCli {
-  std::string scene, lammps;
+  std::string scene;
   std::vector<std::string> set;
 };
-
-// LAMMPS data (io/lammps.hpp), and the law and step at full precision beside it for bench/lammps_inputs.py
-// (rounded G, H leave F(r0) != 0 and a prestressed lattice).
-void write_lammps(const std::string& path, const Scene& sc, const System& sys) {
-  write_lammps_data(path, sc, sys);
-  std::ofstream par(path + ".params");
-  par.precision(17);
-  const PairLaw& law = sys.laws.front();
-  const double dt = choose_step(sc, sys).dt;
-  par << law.p << " " << law.q << " " << law.G << " " << law.H << " " << sys.phase_mass.front() << " " << sys.r0 << " "
-      << sys.cutoff << " " << dt << " " << sys.dim << "\n";
-}
 
 void run(const SceneCli& o) {
   const Scene sc = read_scene(o.scene, o.set);
   const System sys = build_system(sc);
-  if (!o.lammps.empty() && sys.phase_names.size() != 1)
-    throw std::runtime_error("--lammps-data: only single-phase scenes can be written for LAMMPS");
   std::printf("%s: %s\n", sc.file.c_str(), sc.title.c_str());
   std::printf("dimension %d, r0 = %g cm, D = %g cm, %zu particles, %zu bonds\n", sys.dim, sys.r0, sys.cutoff, sys.size(),
               sys.bonds.size());
@@ -57,10 +40,6 @@ void run(const SceneCli& o) {
   else
     for (const auto& e : make_effects<3>(sys, sc)) effects += (effects.empty() ? "" : ", ") + e->name();
   std::printf("effects: %s\n", effects.empty() ? "none" : effects.c_str());
-  if (!o.lammps.empty()) {
-    write_lammps(o.lammps, sc, sys);
-    std::printf("wrote LAMMPS data %s\n", o.lammps.c_str());
-  }
 }
 
 }  // namespace
@@ -70,8 +49,6 @@ void add_scene_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("scene", "Check a scene and describe what it builds (particles, bonds, laws, effects)");
   cmd->add_option("scene", o->scene, "Scene file (TOML)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--set", o->set, "Override a scene key (repeatable)")->type_name("KEY=VALUE");
-  cmd->add_option("--lammps-data", o->lammps, "Also write the particles and bonds as a LAMMPS data file (atom_style bond)")
-      ->type_name("FILE");
   cmd->callback([o] { run(*o); });
 }
 

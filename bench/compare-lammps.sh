@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Throughput of pmfrag and LAMMPS (Debian's lmp) on the same scene, same machine, same run, side by side.
 #   bash bench/compare-lammps.sh [STEPS_2D] [STEPS_3D] [STEPS_BONDED_2D]
-# Scenes: the paper's slit plate (7,14), 2698 particles, under both readings (cutoff: LAMMPS mie/cut;
-# bonded: LAMMPS bond_style table + mie/cut contacts), and the 3-D block (54,940 particles, bonded).
+# Scenes: the paper's slit plate (7,14), 2698 particles, under both readings, and the 3-D block (54,940
+# particles, bonded). LAMMPS runs the deck `pmfrag lammps` writes for the same scene (cutoff: mie/cut;
+# bonded: a tabulated bond that fix bond/break breaks past D, every step as pmfrag checks, with mie/cut
+# contacts).
 # Also checks that the two codes agree on the positions at the end of the 2-D runs.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -56,15 +58,13 @@ printf "%-28s %-7s %14s %14s %8s  %s\n" scene threads pmfrag LAMMPS ratio "(step
 for scene in slit_plate_7_14 block3d_slit; do
   steps=$steps2d; models="cutoff bonded"
   if [ $scene = block3d_slit ]; then steps=$steps3d; models="bonded"; fi
-  "$pmfrag" scene "cases/$scene.toml" --lammps-data "$work/$scene.data" > /dev/null
-  python3 bench/lammps_inputs.py "$work/$scene.data" "$steps" "$work/lmp_$scene" > /dev/null
-  dt=$(awk '{print $8}' "$work/$scene.data.params")
   for model in $models; do
-    msteps=$steps; input="$work/lmp_$scene/$model.in"
-    if [ $scene = slit_plate_7_14 ] && [ $model = bonded ]; then
-      msteps=$steps_bonded; input="$work/lmp_$scene/bonded_long.in"
-      sed "s|^run .*|run $msteps|" "$work/lmp_$scene/bonded.in" > "$input"
-    fi
+    msteps=$steps
+    [ $scene = slit_plate_7_14 ] && [ $model = bonded ] && msteps=$steps_bonded
+    deck="$work/lmp_${scene}_$model"
+    dt=$(lammps_deck "$pmfrag" "cases/$scene.toml" "$msteps" "$deck" --set "pair.model=\"$model\"")
+    input="$deck/in.lammps"
+    [ "$model" = cutoff ] && lammps_tight_skin "$deck"
     for t in 1 2; do
       : > "$work/ours" ; : > "$work/theirs"; : > "$work/tight"; : > "$work/used_threads"
       : > "$work/ratios"
@@ -73,7 +73,7 @@ for scene in slit_plate_7_14 block3d_slit; do
         b=$(lammps_once "$input" "$t")
         # pmfrag adapts its skin: LAMMPS gets its faster of the wide and the tight skin
         if [ "$model" = cutoff ]; then
-          c=$(lammps_once "$work/lmp_$scene/cutoff_tight.in" "$t")
+          c=$(lammps_once "$deck/in_tight.lammps" "$t")
           echo "$c" >> "$work/tight"
           b=$(awk "BEGIN{print ($c > $b) ? $c : $b}")
         fi
@@ -93,10 +93,10 @@ done
 
 # The cutoff plate's whole run, through its fracture (pieces fly, lists are rebuilt): one run each, 1 thread.
 whole=150000
-sed "s|^run .*|run $whole|" "$work/lmp_slit_plate_7_14/cutoff.in" > "$work/lmp_slit_plate_7_14/whole.in"
+lammps_deck "$pmfrag" cases/slit_plate_7_14.toml "$whole" "$work/lmp_whole" --set 'pair.model="cutoff"' > /dev/null
 ours=$("${pin_1[@]}" "$pmfrag" run cases/slit_plate_7_14.toml --out "$work/whole" --force -q --threads 1 --set 'pair.model="cutoff"' \
   --set time.end=1.5e-2 --set output.every=1 > /dev/null && sed -n 's/.*"wall_s": *\([0-9.e+-]*\).*/\1/p' "$work/whole/run.json")
-theirs=$(cd "$work/lmp_slit_plate_7_14" && "${pin_1[@]}" lmp -in whole.in -log none | awk '/Loop time/ {print $4}')
+theirs=$(cd "$work/lmp_whole" && "${pin_1[@]}" lmp -in in.lammps -log none | awk '/Loop time/ {print $4}')
 echo "slit plate (cutoff) whole run, 0 to 1.5e-2 s ($whole steps), 1 thread: pmfrag $ours s, LAMMPS $theirs s (skin 0.3 r0):" \
   "$(awk "BEGIN{printf \"%.1fx\", $theirs / $ours}")"
 
@@ -124,12 +124,13 @@ done | median | awk '{printf "Fig. 6 run (103,000 steps, 2698 particles, 2 threa
 
 # Agreement: final positions of the 2-D plate after the same steps, both readings.
 for model in cutoff bonded; do
-  sed "s|^run .*|run $steps2d\nwrite_dump all custom final.dump id x y modify sort id format float %.17g|" \
-    "$work/lmp_slit_plate_7_14/$model.in" > "$work/lmp_slit_plate_7_14/check.in"
-  (cd "$work/lmp_slit_plate_7_14" && lmp -in check.in -log none -screen none)
+  check="$work/lmp_check_$model"
+  lammps_deck "$pmfrag" cases/slit_plate_7_14.toml "$steps2d" "$check" --set "pair.model=\"$model\"" > /dev/null
+  echo "write_dump all custom final.dump id x y modify sort id format float %.17g" >> "$check/in.lammps"
+  (cd "$check" && lmp -in in.lammps -log none -screen none)
   "$pmfrag" run cases/slit_plate_7_14.toml --out "$work/check" --force -q --set "pair.model=\"$model\"" \
     --set "time.end=$(awk "BEGIN{print $steps2d * 1e-7}")" --set output.every=1 > /dev/null
-  /usr/bin/python3 - "$work/check/trajectory.h5" "$work/lmp_slit_plate_7_14/final.dump" "$model" <<'PY'
+  /usr/bin/python3 - "$work/check/trajectory.h5" "$check/final.dump" "$model" <<'PY'
 import sys, h5py, numpy as np
 x = h5py.File(sys.argv[1])["particles/all/position/value"]
 d = np.loadtxt(sys.argv[2], skiprows=9)[:, 1:3]

@@ -3,3 +3,26 @@
 median() { sort -g | awk '{a[NR] = $1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
 # processor: the model name, as the operating system reports it.
 processor() { lscpu | sed -n 's/^Model name: *//p' | head -1; }
+# lammps_deck PMFRAG SCENE STEPS DIR SET...: `pmfrag lammps` writes DIR/in.lammps (and its data and table) for
+# STEPS steps at the scene's own time step, with a frame only at the start (the throughput runs compare steps,
+# not output). Prints the time step [s].
+lammps_deck() {
+  local pmfrag=$1 scene=$2 steps=$3 dir=$4 dt
+  shift 4
+  "$pmfrag" lammps "$scene" --out "$dir" --force "$@" > /dev/null
+  dt=$(awk '$1 == "timestep" {print $2}' "$dir/in.lammps")
+  "$pmfrag" lammps "$scene" --out "$dir" --force "$@" --set "time.end=$(awk "BEGIN{printf \"%.17g\", $steps * $dt}")" \
+    --set output.every=1 > /dev/null
+  grep -q "^run $steps\$" "$dir/in.lammps" || { echo "lammps_deck: $dir/in.lammps does not run $steps steps" >&2; return 1; }
+  echo "$dt"
+}
+# lammps_tight_skin DIR: DIR/in_tight.lammps, the deck with the skin pmfrag's cutoff model starts from (3/4 of
+# the gap between D and the next lattice shell at sqrt(3) r0, which both lattices have): fewer pairs per step,
+# more rebuilds. The benches give LAMMPS its faster skin.
+lammps_tight_skin() {
+  local dir=$1 r0 d
+  r0=$(sed -n 's/.* r0 = \([0-9.e+-]*\) cm.*/\1/p' "$dir/in.lammps" | head -1)
+  d=$(sed -n 's/.* D = \([0-9.e+-]*\) cm.*/\1/p' "$dir/in.lammps" | head -1)
+  awk -v r0="$r0" -v d="$d" '$1 == "neighbor" { gap = sqrt(3) * r0 - d; $2 = (gap > 0) ? 0.75 * gap : 0.3 * r0 } {print}' \
+    "$dir/in.lammps" > "$dir/in_tight.lammps"
+}

@@ -85,13 +85,12 @@ mv "$csv.tmp" "$csv"
 reps=${REPS:-3}
 steps=${LAMMPS_STEPS:-1000}
 dt=5e-8
-"$pmfrag" scene "$block" --set 'body.0.sites=[82,134,40]' --set body.0.r0=0.1 --set "time.dt=$dt" \
-  --lammps-data "$work/block440k.data" > /dev/null
-/usr/bin/python3 bench/lammps_inputs.py "$work/block440k.data" "$steps" "$work/lmp" > /dev/null
+lammps_deck "$pmfrag" "$block" "$steps" "$work/lmp" --set 'body.0.sites=[82,134,40]' --set body.0.r0=0.1 \
+  --set "time.dt=$dt" > /dev/null
 : > "$work/ratios"; : > "$work/ours"; : > "$work/theirs"
 for _ in $(seq "$reps"); do
   a=$(steps_rate "$block" 2 "$steps" "$dt" --set 'body.0.sites=[82,134,40]' --set body.0.r0=0.1 | awk '{print $1}')
-  b=$(cd "$work/lmp" && mpirun --allow-run-as-root --oversubscribe -np 2 lmp -in bonded.in -log none | grep "Loop time" |
+  b=$(cd "$work/lmp" && mpirun --allow-run-as-root --oversubscribe -np 2 lmp -in in.lammps -log none | grep "Loop time" |
     awk '{printf "%.4g\n", $12 * $9 / $4}')
   echo "$a" >> "$work/ours"; echo "$b" >> "$work/theirs"; awk "BEGIN{print $a / $b}" >> "$work/ratios"
 done
