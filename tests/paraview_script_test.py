@@ -60,6 +60,7 @@ def Text(registrationName=None, Text=""): return Proxy("text", Text=Text)
 def ColorBy(display, what): log.append({"colorby": list(what)})
 def GetColorTransferFunction(name): log.append({"lut": name}); return lut
 def GetAnimationScene(): return scene
+def GetScalarBar(l, v=None): return Proxy("bar")
 def Render(v=None): renders[0] += 1
 def SaveScreenshot(path, v, ImageResolution=None):
     log.append({"screenshot": path, "size": ImageResolution, "time": view.props.get("ViewTime")})
@@ -107,6 +108,9 @@ check("one colour per fragment of the last frame, pmfrag's orange first",
       len(colours) == 9 and [round(c, 3) for c in colours[:3]] == [0.902, 0.624, 0.0], colours[:6])
 check("the legend is shown for a few fragments",
       any(e.get("call") == "display:reader.SetScalarBarVisibility" and e["args"][-1] == "True" for e in log))
+check("the legend's text is dark on the white background",
+      sets.get(("bar", "TitleColor"), {}).get("value") == [0.1, 0.1, 0.1] and
+      sets.get(("bar", "LabelColor"), {}).get("value") == [0.1, 0.1, 0.1], [k for k in sets if k[0] == "bar"])
 
 # The frames' camera, recomputed from the first frame: parallel, the body's box with a 20 % margin plus a disc
 # radius, the focal point 4 % of the scale above the box's centre.

@@ -60,7 +60,7 @@ std::string paraview_script(const View& view, const std::string& title, int size
 import os
 import sys
 
-from paraview.simple import (ColorBy, GetActiveViewOrCreate, GetAnimationScene, GetColorTransferFunction,
+from paraview.simple import (ColorBy, GetActiveViewOrCreate, GetAnimationScene, GetColorTransferFunction, GetScalarBar,
                              PVDReader, Render, SaveScreenshot, Show, Text)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -110,12 +110,26 @@ def show_run(view=None, legend=True):
     count = min(CATEGORIES, int(reader.PointData["fragment_id"].GetRange()[1]) + 1)
     annotations, colours = [], []
     for k in range(count):
-        annotations += [str(k), str(k) + " (largest)" if k == 0 else str(k)]
+        annotations += [str(k), str(k)]
         colours += PALETTE[3 * (k % 8):3 * (k % 8) + 3]
     lut.Annotations = annotations
     lut.IndexedColors = colours
     lut.NanColor = GREY
-    display.SetScalarBarVisibility(view, legend and count <= 24)
+    show_legend = legend and count <= 24
+    display.SetScalarBarVisibility(view, show_legend)
+    if show_legend:
+        # ParaView's default legend text is white (for its dark background): dark here, and the numbers to
+        # the right of the bar, clear of the body.
+        bar = GetScalarBar(lut, view)
+        bar.Title, bar.ComponentTitle = "fragment\n(0: largest)", ""
+        bar.TitleColor = bar.LabelColor = [0.1, 0.1, 0.1]
+        bar.TextPosition = "Ticks left/bottom, annotations right/top"
+        bar.WindowLocation = "Any Location"
+        bar.Position = [0.85, 0.06]
+        bar.HorizontalTitle = 1
+        bar.TitleFontSize = bar.LabelFontSize = 11
+        bar.ScalarBarThickness = 12
+        bar.ScalarBarLength = 0.4
     if TITLE and legend:
         label = Text(registrationName="pmfrag title", Text=TITLE)
         shown = Show(label, view)
