@@ -96,6 +96,7 @@ TEST(BondStencil, MergedOffsetsGiveTheForcesOfOneGroupPerOffset) {
 // machine has AVX-512); a law outside the paper's three exponent pairs sends every bond through the scalar
 // loop. Both are checked against a plain sum over the intact bonds, each with its own law's force.
 namespace {
+template <std::size_t D = 2>
 std::vector<double> plain_bond_forces(const std::vector<double>& x, const std::vector<int>& bi,
                                       const std::vector<int>& bj, const std::vector<int>& blaw,
                                       const std::vector<bool>& alive, const std::vector<PairLaw>& laws) {
@@ -103,11 +104,11 @@ std::vector<double> plain_bond_forces(const std::vector<double>& x, const std::v
   for (std::size_t b = 0; b < bi.size(); ++b) {
     if (!alive[b]) continue;
     const std::size_t i = static_cast<std::size_t>(bi[b]), j = static_cast<std::size_t>(bj[b]);
-    const double d0 = x[2 * i] - x[2 * j], d1 = x[2 * i + 1] - x[2 * j + 1];
-    const double r = std::sqrt(d0 * d0 + d1 * d1);
+    double d[D], r2 = 0.0;
+    for (std::size_t c = 0; c < D; ++c) d[c] = x[D * i + c] - x[D * j + c], r2 += d[c] * d[c];
+    const double r = std::sqrt(r2);
     const double fr = laws[static_cast<std::size_t>(blaw[b])].force(r) / r;
-    f[2 * i] += fr * d0, f[2 * i + 1] += fr * d1;
-    f[2 * j] -= fr * d0, f[2 * j + 1] -= fr * d1;
+    for (std::size_t c = 0; c < D; ++c) f[D * i + c] += fr * d[c], f[D * j + c] -= fr * d[c];
   }
   return f;
 }
@@ -168,8 +169,9 @@ TEST(BondStencil, SeveralLawsGiveEachBondItsOwnLaw) {
 }
 
 // Every law of the (p,q) sweeps, one law a scene, through the evaluator the engine picks (with_law): the paper's
-// three with compile-time exponents, the others with run-time ones. Each is checked against a plain sum of PairLaw::force over the intact bonds, on the plate and on the
-// 3-D block, and for the same bits on one and two threads.
+// three with compile-time exponents, the others with run-time ones. Each is checked against a plain sum of
+// PairLaw::force over the intact bonds, on the plate and on the 3-D block, and for the same bits on one and two
+// threads.
 namespace {
 template <int D>
 void check_every_law(const System& sys, std::uint64_t seed) {
@@ -189,15 +191,7 @@ void check_every_law(const System& sys, std::uint64_t seed) {
            {16, 32}, {31, 64}, {63, 64}}) {
     const std::vector<PairLaw> laws{derive_material(p, q, sys.r0).law};
     const detail::LawTable table(laws);
-    std::vector<double> plain(x.size(), 0.0);
-    for (std::size_t b = 0; b < bi.size(); ++b) {
-      if (!alive[b]) continue;
-      const std::size_t i = static_cast<std::size_t>(bi[b]), j = static_cast<std::size_t>(bj[b]);
-      double d[D], r2 = 0.0;
-      for (std::size_t c = 0; c < D; ++c) d[c] = x[D * i + c] - x[D * j + c], r2 += d[c] * d[c];
-      const double fr = laws[0].force(std::sqrt(r2)) / std::sqrt(r2);
-      for (std::size_t c = 0; c < D; ++c) plain[D * i + c] += fr * d[c], plain[D * j + c] -= fr * d[c];
-    }
+    const std::vector<double> plain = plain_bond_forces<D>(x, bi, bj, blaw, alive, laws);
     double scale = 0.0;
     for (double v : plain) scale = std::max(scale, std::abs(v));
     ASSERT_GT(scale, 0.0);
