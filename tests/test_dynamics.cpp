@@ -452,6 +452,55 @@ TEST(Dynamics, ResidentStepsAreBitwiseThePlainOnes) {
   });
 }
 
+TEST(Dynamics, CheckpointListsOnlyTheBrokenBondsAndResumesBitwise) {
+  // The bonded plate pulled 100x faster than in the paper: bonds break after ~1,150 steps.
+  const Scene sc = read_scene(test::case_path("slit_plate_7_14.toml"),
+                              {"kinematic.0.velocity=[0.0, 2000.0]", "kinematic.1.velocity=[0.0, -2000.0]"});
+  const System sys = build_system(sc);
+  const double dt = choose_step(sc, sys).dt;
+  auto whole = test::make_leapfrog<2>(sys, sc, dt);
+  for (int k = 0; k < 1500; ++k) whole.step();
+  const BondView<2> v = bond_view(*whole.effects().front());
+  ASSERT_GT(v.broke, 0) << "the test needs broken bonds";
+  whole.canonicalize();  // as a run does at a checkpoint
+  const std::vector<double> state = whole.effect_state();
+  // The pair effect writes its counts and the broken bonds only, two values each: far less than two a bond.
+  EXPECT_LT(state.size(), sys.bonds.size() / 2);
+  ASSERT_EQ(state[2], static_cast<double>(v.broke));
+  std::vector<double> x, vel;
+  for (std::size_t i = 0; i < whole.state().size(); ++i)
+    for (int d = 0; d < 2; ++d) x.push_back(whole.state().x[i][d]), vel.push_back(whole.state().v[i][d]);
+  auto resumed = test::make_leapfrog<2>(sys, sc, dt);
+  resumed.restore(whole.state().step, whole.state().t, whole.state().dt, x, vel, state);
+  for (int k = 0; k < 500; ++k) whole.step(), resumed.step();
+  for (std::size_t i = 0; i < whole.state().size(); ++i)
+    ASSERT_EQ(std::memcmp(whole.state().x[i].data(), resumed.state().x[i].data(), 2 * sizeof(double)), 0) << "particle " << i;
+  EXPECT_EQ(bond_view(*resumed.effects().front()).broke, bond_view(*whole.effects().front()).broke);
+  const Observables a = whole.observe(), b = resumed.observe();
+  EXPECT_EQ(a.bond_break_energy, b.bond_break_energy);
+  EXPECT_EQ(a.potential, b.potential);
+  // A state that does not fit is refused, not read past its end or into the wrong bonds.
+  const auto refused = [&](std::vector<double> bad, const char* what) {
+    auto lf = test::make_leapfrog<2>(sys, sc, dt);
+    EXPECT_THROW(lf.restore(whole.state().step, whole.state().t, whole.state().dt, x, vel, bad), std::runtime_error) << what;
+  };
+  refused(std::vector<double>(state.begin(), state.end() - 1), "one value short");
+  auto extra = state;
+  extra.push_back(0.0);
+  refused(extra, "one value over");
+  auto beyond = state;
+  beyond[3] = static_cast<double>(sys.bonds.size());
+  refused(beyond, "a bond number past the last bond");
+  auto counted = state;
+  counted[2] = static_cast<double>(sys.bonds.size()) * 4;
+  refused(counted, "more broken bonds than values");
+  if (v.broke >= 2) {
+    auto unordered = state;
+    std::swap(unordered[3], unordered[5]);
+    refused(unordered, "bond numbers out of order");
+  }
+}
+
 TEST(Dynamics, EveryDeclaredEffectRunsInResidentStepsBitwiseAsPlain) {
   // Gravity, damping and Greenspan's alpha are local forces (stage::local_force): each thread applies them to
   // its own particles inside a resident block, in attachment order after the bonds. Declared together, the

@@ -124,6 +124,9 @@ System build_system(const Scene& sc) {
     if (sys.size() == body_begin.back())
       throw SceneError(sc.file + ": body '" + b.name + "' has no particles (shape, holes and voids remove every site)");
   }
+  // Growth by doubling left up to twice the particles' bytes until the run frees them.
+  sys.position.shrink_to_fit(), sys.velocity.shrink_to_fit(), sys.phase.shrink_to_fit();
+  sys.body.shrink_to_fit(), sys.site.shrink_to_fit();
   for (std::size_t p = 0; p < sc.phases.size(); ++p) {
     if (!sc.phases[p].region) continue;
     std::size_t count = 0;
@@ -263,10 +266,10 @@ template <int D>
 double lanczos_dt_limit(const System& sys) {
   using VecD = Eigen::Matrix<double, D, 1>;
   const std::size_t n = sys.size();
-  struct Spring {
-    std::uint32_t i, j;  // build_system caps a body at 5e7 sites
+  struct Spring {  // e first: a 2-D VecD is 16-byte aligned, and i, j ahead of it padded a spring to 48 bytes
     VecD e;
     double k;
+    std::uint32_t i, j;  // build_system caps a body at 5e7 sites
   };
   std::vector<Spring> springs;
   springs.reserve(sys.bonds.size());
@@ -276,7 +279,7 @@ double lanczos_dt_limit(const System& sys) {
     const double r = d.norm();
     const double k = std::max(0.0, sys.law(sys.phase[i], sys.phase[j]).stiffness(r));
     const Vec3 e = d / r;
-    springs.push_back({static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j), e.head<D>(), k});
+    springs.push_back({e.head<D>(), k, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)});
   }
   std::vector<double> w(n);  // M^-1/2
   for (std::size_t i = 0; i < n; ++i) w[i] = 1.0 / std::sqrt(sys.phase_mass[static_cast<std::size_t>(sys.phase[i])]);

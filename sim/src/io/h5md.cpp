@@ -842,6 +842,10 @@ std::string H5mdReader::incomplete() const {
   return H5Lexists(file_, "/parameters/incomplete", H5P_DEFAULT) > 0 ? read_string(file_, "/parameters/incomplete") : "";
 }
 
+// The layout of a checkpoint's "effects": 2 lists only the bonds not intact (PairBase::save); before it,
+// every bond's state was written.
+constexpr long checkpoint_effects_layout = 2;
+
 void write_checkpoint(const std::string& path, const Checkpoint& c) {
   if (c.velocity.size() != c.position.size()) throw std::logic_error(path + ": checkpoint velocities and positions differ in count");
   write_checkpoint(path, c, c.position.data(), c.velocity.data(), c.position.size());
@@ -864,6 +868,7 @@ void write_checkpoint(const std::string& path, const Checkpoint& c, const double
       array_dataset(f, "position", values ? position : nullptr, {values});
       array_dataset(f, "velocity", values ? velocity : nullptr, {values});
       array_dataset(f, "effects", c.effects, {c.effects.size()});
+      array_dataset<long>(f, "effects_layout", {checkpoint_effects_layout}, {});
     } catch (const std::runtime_error&) {
       ok = false;
     }
@@ -890,6 +895,10 @@ Checkpoint read_checkpoint(const std::string& path) {
     c.time = td.at(0), c.dt = td.at(1), c.level = static_cast<int>(td.at(2)), c.calm = static_cast<int>(td.at(3));
     c.position = read_all<double>(f, "position");
     c.velocity = read_all<double>(f, "velocity");
+    if (H5Lexists(f, "effects_layout", H5P_DEFAULT) <= 0 ||
+        read_all<long>(f, "effects_layout").at(0) != checkpoint_effects_layout)
+      throw std::runtime_error(path + ": written by another pmfrag (its bond record is laid out otherwise): cannot "
+                               "resume; run the scene again with --force");
     c.effects = read_all<double>(f, "effects");
   } catch (...) {
     H5Fclose(f);

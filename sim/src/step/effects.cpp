@@ -5,6 +5,7 @@
 #include "threads/team.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 #include <cmath>
 #include <functional>
 
@@ -88,7 +89,8 @@ class Kinematic final : public Effect<D> {
     out.insert(out.end(), {left_sum_, g0_, g_, static_cast<double>(tallied_step_)});
   }
   std::size_t saved_size() const override { return 4; }
-  void load(const double*& in) override {
+  void load(const double*& in, const double* end) override {
+    if (end - in < 4) throw std::runtime_error("checkpoint does not match the scene (boundary work)");
     left_sum_ = *in++, g0_ = *in++, g_ = *in++;
     tallied_step_ = static_cast<long>(*in++);
   }

@@ -54,25 +54,38 @@ template <bool ZeroF, bool Uniform>
 }  // namespace
 
 template <int D>
+State<D> initial_state(const System& sys) {
+  const std::size_t n = sys.size();
+  State<D> s;
+  s.r0 = sys.r0;
+  s.x.resize(n);
+  s.v.resize(n);
+  s.mass.resize(n);
+  s.inv_mass.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    s.x[i] = sys.position[i].head<D>();
+    s.v[i] = sys.velocity[i].head<D>();
+    s.mass[i] = sys.phase_mass[static_cast<std::size_t>(sys.phase[i])];
+    s.inv_mass[i] = 1.0 / s.mass[i];
+  }
+  return s;
+}
+
+template <int D>
 Leapfrog<D>::Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>> effects, double dt, bool adaptive,
                       ThreadOptions threads)
-    : effects_(std::move(effects)), uniform_(!adaptive), threads_(std::make_unique<detail::Threads>(std::move(threads))),
-      tuner_(std::make_unique<detail::ThreadTuner>(*threads_, sys.size())),
+    : Leapfrog(initial_state<D>(sys), std::move(effects), dt, adaptive, std::move(threads)) {}
+
+template <int D>
+Leapfrog<D>::Leapfrog(State<D> initial, std::vector<std::unique_ptr<Effect<D>>> effects, double dt, bool adaptive,
+                      ThreadOptions threads)
+    : s_(std::move(initial)), effects_(std::move(effects)), uniform_(!adaptive),
+      threads_(std::make_unique<detail::Threads>(std::move(threads))),
+      tuner_(std::make_unique<detail::ThreadTuner>(*threads_, s_.size())),
       balancer_(std::make_unique<detail::LoadBalancer>()) {
-  const std::size_t n = sys.size();
+  const std::size_t n = s_.size();
   s_.dt = dt;
-  s_.r0 = sys.r0;
-  s_.x.resize(n);
-  s_.v.resize(n);
   s_.f.assign(n, V::Zero());
-  s_.mass.resize(n);
-  s_.inv_mass.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    s_.x[i] = sys.position[i].head<D>();
-    s_.v[i] = sys.velocity[i].head<D>();
-    s_.mass[i] = sys.phase_mass[static_cast<std::size_t>(sys.phase[i])];
-    s_.inv_mass[i] = 1.0 / s_.mass[i];
-  }
   for (auto& e : effects_) {
     const unsigned st = e->stages();
     if (st & stage::assigns_forces) {  // fused forces are computed before the others (plain_step)
@@ -452,15 +465,16 @@ void Leapfrog<D>::restore(long step, double time, double dt, const std::vector<d
   s_.dt = dt;
   for (std::size_t i = 0; i < s_.size(); ++i)
     for (int d = 0; d < D; ++d) s_.x[i][d] = x[i * D + d], s_.v[i][d] = v[i * D + d];
-  std::vector<double> probe;
-  for (const auto& e : effects_) e->save(probe);
-  if (probe.size() != effects.size()) throw std::runtime_error("checkpoint does not match the scene (effects)");
   const double* in = effects.data();
-  for (auto& e : effects_) e->load(in);
+  const double* end = in + effects.size();
+  for (auto& e : effects_) e->load(in, end);
+  if (in != end) throw std::runtime_error("checkpoint does not match the scene (effects)");
   canonicalize();
 }
 
 template class Leapfrog<2>;
 template class Leapfrog<3>;
+template State<2> initial_state<2>(const System&);
+template State<3> initial_state<3>(const System&);
 
 }  // namespace pmfrag

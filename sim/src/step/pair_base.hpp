@@ -16,6 +16,8 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <stdexcept>
+#include <unordered_map>
 #include <utility>
 
 namespace pmfrag::detail {
@@ -35,10 +37,9 @@ class PairBase : public Effect<D> {
     inv_rmin_ = sys.r_min > 0.0 ? 1.0 / sys.r_min : std::numeric_limits<double>::infinity();
     r_min_ = sys.r_min;
     n_ = sys.size();
-    bi_.reserve(sys.bonds.size()), bj_.reserve(sys.bonds.size()), blaw_.reserve(sys.bonds.size());  // no slack
-    for (const auto& b : sys.bonds) bi_.push_back(b[0]), bj_.push_back(b[1]), blaw_.push_back(law_of(b[0], b[1]));
+    bi_.reserve(sys.bonds.size()), bj_.reserve(sys.bonds.size());  // no slack
+    for (const auto& b : sys.bonds) bi_.push_back(b[0]), bj_.push_back(b[1]);
     alive_.assign(bi_.size(), 1);
-    phi_break_.assign(bi_.size(), 0.0);
     contact_reach_.resize(laws_.size());
     for (std::size_t l = 0; l < laws_.size(); ++l) contact_reach_[l] = laws_[l].equilibrium_spacing();
     r0_ = sys.r0;
@@ -55,22 +56,37 @@ class PairBase : public Effect<D> {
            stage::assigns_forces | stage::resident;
   }
 
-  // History for a checkpoint; the layout is the same for both readings.
+  // History for a checkpoint; the layout is the same for both readings. Only the bonds not intact (the
+  // cutoff model: not within D) are listed, ascending, each with phi at its break: a closing checkpoint of
+  // the whole bond state, two doubles a bond, was the peak of a run's memory at millions of bonds.
   void save(std::vector<double>& out) const override {
     out.push_back(static_cast<double>(first_break_step_));
     out.push_back(first_break_time_);
-    for (std::size_t b = 0; b < alive_.size(); ++b) out.push_back(alive_[b]), out.push_back(phi_break_[b]);
+    out.push_back(static_cast<double>(bonds_not_intact()));
+    for (std::size_t b = 0; b < alive_.size(); ++b)
+      if (!alive_[b]) out.push_back(static_cast<double>(b)), out.push_back(phi_at_break(b));
     out.push_back(skin_);  // the adapted skin decides when the list is next rebuilt: part of the state
     out.push_back(static_cast<double>(broke_count_));
     out.push_back(static_cast<double>(re_formed_count_));
   }
-  std::size_t saved_size() const override { return 2 * alive_.size() + 5; }
-  void load(const double*& in) override {
+  std::size_t saved_size() const override { return 2 * bonds_not_intact() + 6; }
+  void load(const double*& in, const double* end) override {
+    const auto bad = [] { return std::runtime_error("checkpoint does not match the scene (bond record)"); };
+    if (end - in < 3) throw bad();
     first_break_step_ = static_cast<long>(*in++);
     first_break_time_ = *in++;
-    for (std::size_t b = 0; b < alive_.size(); ++b) {
-      alive_[b] = static_cast<std::uint8_t>(*in++);
-      phi_break_[b] = *in++;
+    const double listed = *in++;
+    if (!(listed >= 0.0 && listed <= static_cast<double>(alive_.size())) || end - in < 2 * static_cast<long>(listed) + 3)
+      throw bad();
+    std::fill(alive_.begin(), alive_.end(), std::uint8_t{1});
+    phi_break_.clear();
+    double last = -1.0;
+    for (long k = 0; k < static_cast<long>(listed); ++k) {
+      const double b = *in++, phi = *in++;
+      if (!(b > last && b < static_cast<double>(alive_.size()))) throw bad();  // ascending bond numbers
+      last = b;
+      alive_[static_cast<std::size_t>(b)] = 0;
+      if (phi != 0.0) phi_break_[static_cast<std::size_t>(b)] = phi;
     }
     skin_ = *in++;
     broke_count_ = static_cast<long>(*in++);
@@ -130,13 +146,31 @@ class PairBase : public Effect<D> {
   virtual void closest_bonds(const double* /*x*/, double* /*c2*/) const {}
   /// step_limit: the squared distance within which a list pair of this law acts.
   virtual double list_reach2(int law) const = 0;
-  /// rebuild: pairs (i < j) the list leaves out, grouped by first particle (ByFirst); none by default.
+  /// Pairs (a, b) grouped by a: a's partners are other[start[a], start[a + 1]), in the order given.
   struct ByFirst {
     std::vector<int> start, other;
   };
-  virtual ByFirst excluded_from_list() const { return {}; }
+  /// rebuild: pairs (i < j) the list leaves out, read in place: particle a's are other[e] for e in
+  /// [start[a], start[a + 1]) with keep[e] set (keep null: all). None by default.
+  struct Exclusions {
+    const int* start = nullptr;
+    const int* other = nullptr;
+    const std::uint8_t* keep = nullptr;
+  };
+  virtual Exclusions excluded_from_list() const { return {}; }
   /// rebuild: after the list is built and indexed.
   virtual void list_built() {}
+
+  /// The law of original bond b (one phase: the only law).
+  int bond_law(std::size_t b) const { return nphase_ == 1 ? 0 : law_of(bi_[b], bj_[b]); }
+  std::size_t bonds_not_intact() const {
+    return static_cast<std::size_t>(std::count(alive_.begin(), alive_.end(), std::uint8_t{0}));
+  }
+  /// erg: phi of bond b at its break (0 for an intact bond, and in the cutoff model).
+  double phi_at_break(std::size_t b) const {
+    const auto it = phi_break_.find(b);
+    return it == phi_break_.end() ? 0.0 : it->second;
+  }
 
   int law_of(int a, int b) const {
     return pair_law_[static_cast<std::size_t>(phase_[static_cast<std::size_t>(a)]) * nphase_ +
@@ -249,13 +283,12 @@ class PairBase : public Effect<D> {
   void rebuild(const State<D>& s) {
     ++list_builds_;
     list_.clear();
-    const ByFirst excluded = excluded_from_list();
-    const bool excludes = !excluded.start.empty();
+    const Exclusions excluded = excluded_from_list();
     std::vector<std::pair<int, int>> found;
     cells_.for_each_pair(s.x, max_reach_ + skin_, [&](std::uint32_t a, std::uint32_t b, double) {
-      if (excludes) {
+      if (excluded.start) {
         for (int e = excluded.start[a]; e < excluded.start[a + 1]; ++e)
-          if (excluded.other[static_cast<std::size_t>(e)] == static_cast<int>(b)) return;
+          if (excluded.other[e] == static_cast<int>(b) && (!excluded.keep || excluded.keep[e])) return;
       }
       found.push_back({static_cast<int>(a), static_cast<int>(b)});
     });
@@ -279,8 +312,7 @@ class PairBase : public Effect<D> {
     x_build_.assign(s.x.front().data(), s.x.front().data() + s.size() * D);
   }
 
-  /// Pairs (a, b) grouped by a (a counting sort): a's partners are other[start[a], start[a + 1]), in the
-  /// order given.
+  /// Pairs grouped by first particle (a counting sort).
   ByFirst by_first(const std::vector<std::pair<int, int>>& pairs) const {
     ByFirst g;
     g.start.assign(n_ + 1, 0);
@@ -349,9 +381,9 @@ class PairBase : public Effect<D> {
   std::vector<double> law_mass_;  ///< g: the lightest particle a law acts on (Eq. 15 takes the smallest m)
   bool uses_list_ = false;
   // the original bonds and their record
-  std::vector<int> bi_, bj_, blaw_;  ///< original bonds (i < j) and their law
+  std::vector<int> bi_, bj_;         ///< original bonds (i < j); their law: bond_law
   std::vector<std::uint8_t> alive_;  ///< bonded: intact; cutoff: within D
-  std::vector<double> phi_break_;    ///< erg: phi at the break (bonded)
+  std::unordered_map<std::size_t, double> phi_break_;  ///< erg: phi at the break, of the broken bonds (bonded)
   std::vector<BondEvent> events_;  ///< recorded since the last take_bond_events
   long broke_count_ = 0;           ///< bonds broken (cutoff model: pairs leaving D), over the whole run
   long re_formed_count_ = 0;       ///< cutoff model: pairs coming back within D

@@ -15,7 +15,7 @@ namespace {
 template <int D>
 class BondedPair final : public PairBase<D> {
   using Base = PairBase<D>;
-  using Base::alive_, Base::bi_, Base::bj_, Base::blaw_, Base::laws_, Base::law_table_, Base::nphase_, Base::n_,
+  using Base::alive_, Base::bi_, Base::bj_, Base::laws_, Base::law_table_, Base::nphase_, Base::n_,
       Base::cutoff_, Base::inv_rmin_, Base::r_min_, Base::max_reach_, Base::r0_, Base::contact_reach_,
       Base::phi_break_, Base::list_, Base::skin_, Base::skin_min_, Base::skin_max_, Base::since_break_,
       Base::break_room_, Base::uses_list_, Base::spec_;
@@ -24,8 +24,16 @@ class BondedPair final : public PairBase<D> {
   using V = Eigen::Matrix<double, D, 1>;
 
   BondedPair(const System& sys, const PairSpec& spec) : Base(sys, spec, spec.contact) {
-    stencil_ = BondStencil<D>(n_, bi_, bj_, blaw_, spec_.single_precision);
+    std::vector<int> blaw(bi_.size());
+    for (std::size_t b = 0; b < blaw.size(); ++b) blaw[b] = this->bond_law(b);
+    stencil_ = BondStencil<D>(n_, bi_, bj_, blaw, spec_.single_precision);
     stencil_.assign_forces(true);  // stage::assigns_forces: the bonds' sum is every particle's first term
+    // Original bonds come sorted by first particle (build_system): bonds [bond_from_[a], bond_from_[a + 1]).
+    if (!std::is_sorted(bi_.begin(), bi_.end()))
+      throw std::logic_error("bonded pair: the System's bonds are not sorted by their first particle");
+    bond_from_.assign(n_ + 1, 0);
+    for (const int i : bi_) ++bond_from_[static_cast<std::size_t>(i) + 1];
+    for (std::size_t a = 0; a < n_; ++a) bond_from_[a + 1] += bond_from_[a];
     max_reach_ = *std::max_element(contact_reach_.begin(), contact_reach_.end());
   }
 
@@ -44,8 +52,8 @@ class BondedPair final : public PairBase<D> {
   void canonicalize(const State<D>& s) override {
     if (uses_list_) this->rebuild(s);
   }
-  void load(const double*& in) override {
-    Base::load(in);
+  void load(const double*& in, const double* end) override {
+    Base::load(in, end);
     for (std::size_t b = 0; b < alive_.size(); ++b) stencil_.set_alive(b, alive_[b]);
   }
 
@@ -125,9 +133,9 @@ class BondedPair final : public PairBase<D> {
     for (std::size_t b = 0; b < bi_.size(); ++b) {
       const double r = (s.x[static_cast<std::size_t>(bi_[b])] - s.x[static_cast<std::size_t>(bj_[b])]).norm();
       if (alive_[b])
-        pe += law_potential(laws_[static_cast<std::size_t>(blaw_[b])], r, r_min_);
+        pe += law_potential(laws_[static_cast<std::size_t>(this->bond_law(b))], r, r_min_);
       else
-        ++beyond, o.bond_break_energy += phi_break_[b];
+        ++beyond, o.bond_break_energy += this->phi_at_break(b);
     }
     for (std::size_t p = 0; p < list_.size(); ++p) {
       const double r = (s.x[static_cast<std::size_t>(list_.i[p])] - s.x[static_cast<std::size_t>(list_.j[p])]).norm();
@@ -144,18 +152,19 @@ class BondedPair final : public PairBase<D> {
     const long nb = static_cast<long>(bi_.size());
     for (long b = 0; b < nb; ++b) {
       const std::size_t u = static_cast<std::size_t>(b);
-      if (alive_[u]) c2[blaw_[u]] = std::min(c2[blaw_[u]], Base::r2_of(x, bi_[u], bj_[u]));
+      if (alive_[u]) {
+        double& c = c2[this->bond_law(u)];
+        c = std::min(c, Base::r2_of(x, bi_[u], bj_[u]));
+      }
     }
   }
   double list_reach2(int law) const override {
     return contact_reach_[static_cast<std::size_t>(law)] * contact_reach_[static_cast<std::size_t>(law)];
   }
-  // The list holds contacts: intact bonds act through the stencil.
-  typename Base::ByFirst excluded_from_list() const override {
-    std::vector<std::pair<int, int>> intact;
-    for (std::size_t b = 0; b < bi_.size(); ++b)
-      if (alive_[b]) intact.push_back({bi_[b], bj_[b]});
-    return this->by_first(intact);
+  // The list holds contacts: intact bonds act through the stencil. They are read in place, by first particle
+  // (a list of the intact ones, made at each rebuild, was 40 bytes a particle at the setup's peak memory).
+  typename Base::Exclusions excluded_from_list() const override {
+    return {bond_from_.data(), bj_.data(), alive_.data()};
   }
 
   // Bonds found too long in the last force evaluation are gone for good.
@@ -182,7 +191,7 @@ class BondedPair final : public PairBase<D> {
       if (!(r2 <= cut2)) {
         alive_[b] = 0;
         stencil_.set_alive(b, false);
-        phi_break_[b] = law_potential(laws_[static_cast<std::size_t>(blaw_[b])], std::sqrt(r2), r_min_);
+        phi_break_[b] = law_potential(laws_[static_cast<std::size_t>(this->bond_law(b))], std::sqrt(r2), r_min_);
         this->record(s, b, false);
         shortest2 = std::min(shortest2, r2);
       }
@@ -247,6 +256,7 @@ class BondedPair final : public PairBase<D> {
   }
 
   BondStencil<D> stencil_;  ///< the bonds
+  std::vector<int> bond_from_;  ///< bonds by first particle: a's are [bond_from_[a], bond_from_[a + 1])
   long broke_ = 0;          ///< bonds the last add_fused_forces found too long (retired by add_forces)
   std::atomic<long> broke_of_team_{0};  ///< the same, summed by the threads of resident_forces
   struct alignas(64) ThreadContacts {  ///< resident steps: a thread's contacts (a cache line of its own)

@@ -24,7 +24,7 @@ struct System {
   std::vector<double> phase_mass;         ///< g
   std::vector<PairLaw> laws;              ///< distinct laws
   std::vector<int> phase_pair_law;        ///< [a * nphase + b] -> index into laws
-  std::vector<std::array<int, 2>> bonds;  ///< original nearest-neighbour pairs (i < j), same body
+  std::vector<std::array<int, 2>> bonds;  ///< original nearest-neighbour pairs (i < j), same body, sorted
   std::vector<int> held;                  ///< 1 for particles a kinematic selection moves (targets, pulled rows)
 
   std::size_t size() const { return position.size(); }

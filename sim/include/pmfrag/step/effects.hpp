@@ -157,7 +157,8 @@ class Effect {
   virtual void save(std::vector<double>&) const {}
   /// How many values save() appends (a hint for one allocation).
   virtual std::size_t saved_size() const { return 0; }
-  virtual void load(const double*&) {}
+  /// Reads what save() appended from [in, end), advancing in; throws std::runtime_error if it does not fit.
+  virtual void load(const double*& /*in*/, const double* /*end*/) {}
 
   /// Reports: what the effect knows of the original bonds (the pair effects; others report nothing), and
   /// the bond events recorded since the last call, moved to the end of `out` in step order.

@@ -26,6 +26,10 @@ struct GuardError : std::runtime_error {
   long particle;
 };
 
+/// The System's particles at t = 0 (positions, velocities, masses) as an integrator's state.
+template <int D>
+State<D> initial_state(const System& sys);
+
 template <int D>
 class Leapfrog {
  public:
@@ -35,6 +39,9 @@ class Leapfrog {
   /// `adaptive`: steps will vary (dt = "adaptive"), so time is summed rather than step x dt.
   /// `threads`: how the steps use threads (the count, whether it is measured, the shares).
   Leapfrog(const System& sys, std::vector<std::unique_ptr<Effect<D>>> effects, double dt, bool adaptive = false,
+           ThreadOptions threads = {});
+  /// The same from the System's particles already taken (initial_state), so the System can go first.
+  Leapfrog(State<D> initial, std::vector<std::unique_ptr<Effect<D>>> effects, double dt, bool adaptive = false,
            ThreadOptions threads = {});
   Leapfrog(Leapfrog&&) noexcept;
   ~Leapfrog();

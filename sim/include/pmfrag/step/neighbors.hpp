@@ -28,16 +28,18 @@ class CellList {
     V lo = x[0];
     for (const auto& p : x) lo = lo.cwiseMin(p);
     const double inv_cell = 1.0 / cutoff;
-    entries_.resize(n);
+    // Built per call, not kept: at millions of particles they were 32 (2-D) to 40 (3-D) bytes a particle for
+    // the whole run, and a rebuild's sort costs far more than their allocation.
+    std::vector<Entry> entries(n);
     for (std::size_t i = 0; i < n; ++i) {
       std::array<std::int64_t, 3> c{0, 0, 0};
       for (int d = 0; d < D; ++d) c[d] = clamp_cell(std::floor((x[i][d] - lo[d]) * inv_cell));
-      entries_[i] = {pack(c), static_cast<std::uint32_t>(i)};
+      entries[i] = {pack(c), static_cast<std::uint32_t>(i)};
     }
-    std::sort(entries_.begin(), entries_.end());
-    // positions in cell order: the inner loop reads a contiguous run instead of jumping through x
-    sorted_.resize(n);
-    for (std::size_t a = 0; a < n; ++a) sorted_[a] = x[entries_[a].index];
+    std::sort(entries.begin(), entries.end());
+    // positions in cell order (sorted): the inner loop reads a contiguous run instead of jumping through x
+    std::vector<V> sorted(n);
+    for (std::size_t a = 0; a < n; ++a) sorted[a] = x[entries[a].index];
     const double cut2 = cutoff * cutoff;
     // One cursor per row of neighbour cells (dz, dy): cells are visited in key order, so the first key a row
     // needs only grows, and each cursor moves forward through the sorted entries (a binary search per
@@ -46,8 +48,8 @@ class CellList {
     std::size_t begin = 0;
     while (begin < n) {
       std::size_t end = begin;
-      const std::uint64_t key = entries_[begin].key;
-      while (end < n && entries_[end].key == key) ++end;
+      const std::uint64_t key = entries[begin].key;
+      while (end < n && entries[end].key == key) ++end;
       const auto c = unpack(key);
       // Neighbour cells with key >= this one cover each pair of cells once (same cell: i < j).
       int row = 0;
@@ -59,26 +61,26 @@ class CellList {
           // The row's first key for this cell; the next cell (one to the right) needs the cell after it.
           std::size_t& first = cursor[static_cast<std::size_t>(row)];
           const std::uint64_t row_key = pack({c[0] > 0 ? c[0] - 1 : 0, ny, nz});
-          while (first < n && entries_[first].key < row_key) ++first;
+          while (first < n && entries[first].key < row_key) ++first;
           std::size_t at = first;
           for (int dx = -1; dx <= 1; ++dx) {
             const std::int64_t nx = c[0] + dx;
             if (nx < 0 || nx > max_cell) continue;
             const std::uint64_t nkey = pack({nx, ny, nz});
             if (nkey < key) continue;
-            while (at < n && entries_[at].key < nkey) ++at;
+            while (at < n && entries[at].key < nkey) ++at;
             const std::size_t nb = at;
             std::size_t ne = nb;
-            while (ne < n && entries_[ne].key == nkey) ++ne;
+            while (ne < n && entries[ne].key == nkey) ++ne;
             at = ne;
             checks_ += (end - begin) * (ne - nb);
             for (std::size_t a = begin; a < end; ++a) {
-              const std::uint32_t i = entries_[a].index;
-              const V xi = sorted_[a];
+              const std::uint32_t i = entries[a].index;
+              const V xi = sorted[a];
               for (std::size_t b = nkey == key ? a + 1 : nb; b < ne; ++b) {  // same cell: sorted by index
-                const double r2 = (xi - sorted_[b]).squaredNorm();
+                const double r2 = (xi - sorted[b]).squaredNorm();
                 if (r2 < cut2) {
-                  const std::uint32_t j = entries_[b].index;
+                  const std::uint32_t j = entries[b].index;
                   f(std::min(i, j), std::max(i, j), r2);
                 }
               }
@@ -113,8 +115,6 @@ class CellList {
     return {static_cast<std::int64_t>(k & max_cell), static_cast<std::int64_t>((k >> 21) & max_cell),
             static_cast<std::int64_t>(k >> 42)};
   }
-  std::vector<Entry> entries_;
-  std::vector<V> sorted_;  ///< positions in entries_ order
   std::size_t checks_ = 0;
 };
 
