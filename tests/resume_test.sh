@@ -25,6 +25,8 @@ for delay in 0.02 0.$((RANDOM % 4 + 2)); do
     h5ls -r "$work/cut/trajectory.h5" > /dev/null || { echo "FAIL: killed trajectory unreadable"; fail=1; }
     "$pmfrag" run --resume "$work/cut" -q > /dev/null || { echo "FAIL: resume"; fail=1; }
   fi
+  # the killed writer's trajectory.h5.writing made --resume rebuild; the resumed run closed its trajectory
+  [ ! -e "$work/cut/trajectory.h5.writing" ] || { echo "FAIL: trajectory.h5.writing left after resume"; fail=1; }
   for obj in /particles/all/position /particles/all/velocity /observables /connectivity; do
     if ! h5diff -q "$work/whole/trajectory.h5" "$work/cut/trajectory.h5" "$obj" "$obj"; then
       echo "FAIL: $obj differs after resume (delay $delay)"; fail=1
@@ -45,6 +47,7 @@ else
   [ $rc -eq 130 ] || { echo "FAIL: SIGINT exit code $rc, expected 130"; fail=1; }
   grep -q '"interrupted": true' "$work/int/run.json" || { echo "FAIL: run.json does not say interrupted"; fail=1; }
   h5ls -r "$work/int/trajectory.h5" > /dev/null || { echo "FAIL: interrupted trajectory unreadable"; fail=1; }
+  [ ! -e "$work/int/trajectory.h5.writing" ] || { echo "FAIL: SIGINT left the trajectory unclosed"; fail=1; }
   "$pmfrag" run --resume "$work/int" -q > /dev/null || { echo "FAIL: resume after SIGINT"; fail=1; }
   for obj in /particles/all/position /particles/all/velocity /observables /connectivity; do
     h5diff -q "$work/whole/trajectory.h5" "$work/int/trajectory.h5" "$obj" "$obj" || { echo "FAIL: $obj differs after SIGINT + resume"; fail=1; }

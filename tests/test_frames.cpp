@@ -11,6 +11,9 @@
 
 #include <cmath>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 using namespace pmfrag;
 namespace fs = std::filesystem;
 
@@ -146,6 +149,37 @@ TEST(Frames, AResumedPositionsOnlyTrajectoryStaysWithoutVelocities) {
   EXPECT_EQ(rd.frame(1).position[0], 1.0);
   EXPECT_EQ(rd.frame(2).position[0], 5.0);
   EXPECT_EQ(rd.frame(2).step, 9);
+}
+
+TEST(Frames, ATrajectoryItsWriterDidNotCloseIsNotAppendedTo) {
+  // A writer killed between flushes may leave half of a frame's metadata in the file; its PATH.writing stays,
+  // and resume rebuilds from the frames the checkpoint counts instead of appending.
+  const fs::path d = test::temp_dir("frames_marker");
+  const Scene sc = read_scene(test::case_path("slit_plate_3_5.toml"), {});
+  const System sys = build_system(sc);
+  RunParameters run;
+  run.dt = 1e-7, run.end = 1e-6;
+  const std::string path = (d / "trajectory.h5").string();
+  const std::vector<double> x(sys.size() * 2, 1.0), v(sys.size() * 2, 2.0);
+  {
+    H5mdWriter w(path, sys, sc, run);
+    w.write_frame(0, 0.0, x, v, {});
+    EXPECT_FALSE(trajectory_opens_for_append(path)) << "a trajectory still being written";
+  }
+  EXPECT_TRUE(trajectory_opens_for_append(path));
+  EXPECT_FALSE(fs::exists(path + ".writing"));
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {  // appends a frame and dies without closing, as under SIGKILL
+    H5mdWriter w(path, 1, 0);
+    w.write_frame(1, 1e-7, x, v, {});
+    _exit(0);
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_TRUE(fs::exists(path + ".writing"));
+  EXPECT_FALSE(trajectory_opens_for_append(path));
 }
 
 TEST(Frames, FieldsWithoutPositionOrUnknownAreRefusedNamingTheKey) {

@@ -232,6 +232,18 @@ void write_law(hid_t g, const PairLaw& law, double mass) {
 const char* const observable_names[] = {"kinetic_energy", "potential_energy", "total_energy", "boundary_work",
                                         "bond_break_energy", "energy_balance", "pairs_beyond_cutoff"};
 
+namespace {
+// A trajectory open for writing has a sidecar, PATH.writing, removed once HDF5 has closed the file. One left
+// behind says the writer died (SIGKILL, power loss) between flushes: HDF5 may have put some metadata of the
+// next frame on disk and not the rest, so appending to that file can fail frames later. --resume then rebuilds.
+std::string writing_marker(const std::string& path) { return path + ".writing"; }
+void put_writing_marker(const std::string& path) {
+  const std::string marker = writing_marker(path);
+  std::FILE* f = std::fopen(marker.c_str(), "w");
+  if (!f || std::fclose(f) != 0) throw std::runtime_error(marker + ": cannot write: " + std::strerror(errno != 0 ? errno : EIO));
+}
+}  // namespace
+
 struct H5mdWriter::Impl {
   hid_t file = -1;
   std::string part, path;  ///< the temporary name until the first frame is written, and the final one
@@ -264,14 +276,19 @@ H5mdWriter::H5mdWriter(const std::string& path, const System& sys, const Scene& 
   // trajectory.h5 that exists holds at least one whole frame, even if the run is killed at once.
   const std::string part = path + ".part";
   m.part = part, m.path = path;
+  put_writing_marker(path);
   errno = 0;
   m.file = H5Fcreate(part.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-  if (m.file < 0)
-    throw std::runtime_error(part + ": cannot create the trajectory: " + std::strerror(errno != 0 ? errno : EIO));
+  if (m.file < 0) {
+    const int err = errno != 0 ? errno : EIO;
+    std::remove(writing_marker(path).c_str());
+    throw std::runtime_error(part + ": cannot create the trajectory: " + std::strerror(err));
+  }
   try {
     m.writing([&] { create(sys, scene, run); });
   } catch (const std::runtime_error& e) {
     std::remove(part.c_str());  // the destructor does not run for a constructor that throws
+    std::remove(writing_marker(path).c_str());
     throw std::runtime_error(std::string(e.what()) + " (no frame was written)");
   }
 }
@@ -402,6 +419,8 @@ void H5mdWriter::create(const System& sys, const Scene& scene, const RunParamete
 H5mdWriter::H5mdWriter(const std::string& path, long keep_frames, long keep_events) : impl_(std::make_unique<Impl>()) {
   auto& m = *impl_;
   hdf5_stack_as_asked();  // a missing record is reported below, in one line
+  m.path = path;
+  put_writing_marker(path);
   m.file = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
   if (m.file < 0) throw std::runtime_error(path + ": cannot reopen trajectory to resume");
   const hsize_t keep = static_cast<hsize_t>(keep_frames);
@@ -524,8 +543,9 @@ void H5mdWriter::close() {
   if (m.record >= 0) H5Gclose(m.record);
   H5Gclose(m.obs_group);
   H5Gclose(m.particles);
-  H5Fclose(m.file);
+  const bool closed = H5Fclose(m.file) >= 0;
   m.file = -1;
+  if (closed) std::remove(writing_marker(m.path).c_str());  // whole on disk: it may be appended to
 }
 
 // ---- reader ----
@@ -909,6 +929,7 @@ Checkpoint read_checkpoint(const std::string& path) {
 }
 
 bool trajectory_opens_for_append(const std::string& path) {
+  if (std::filesystem::exists(writing_marker(path))) return false;
   const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
   if (f < 0) return false;
   H5Fclose(f);

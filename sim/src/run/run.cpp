@@ -240,9 +240,12 @@ RunResult run_dim(const Scene& scene, System&& sys, const RunOptions& opt, const
   if (!from) start_run_folder(dir, scene, opt.force);
   const std::string traj = (dir / "trajectory.h5").string();
   if (from && !trajectory_opens_for_append(traj)) {
-    // A full disk cut the trajectory's end; the frames the checkpoint counts are copied into a new one.
+    // A full disk cut the trajectory's end, or its writer died before closing it: the frames the checkpoint
+    // counts are copied into a new one.
     rebuild_trajectory(traj, sys, scene, rp, from->frames, from->bond_events);
-    if (opt.log) opt.log("rebuilt " + traj + " from its first " + std::to_string(from->frames) + " frames (its end was cut)");
+    if (opt.log)
+      opt.log("rebuilt " + traj + " from its first " + std::to_string(from->frames) +
+              " frames (its end was cut, or its writer did not close it)");
   }
   std::unique_ptr<H5mdWriter> writer_ptr = from ? std::make_unique<H5mdWriter>(traj, from->frames, from->bond_events)
                                                 : std::make_unique<H5mdWriter>(traj, sys, scene, rp);

@@ -155,14 +155,16 @@ void write_checkpoint(const std::string& path, const Checkpoint& c, const double
                       std::size_t values);
 Checkpoint read_checkpoint(const std::string& path);
 
-/// Resume after a full disk: HDF5 cannot reopen for appending a trajectory whose end the disk cut off. Its first
+/// Resume after a full disk or a killed writer: HDF5 cannot reopen for appending a trajectory whose end the disk
+/// cut off, and one whose writer died between flushes may hold half of a frame's metadata. Its first
 /// `keep_frames` frames and `keep_events` rows of the bond record (what the checkpoint counts), read back from
 /// the cut file, are written into a new trajectory (the time-independent data from sys, scene and run, as a new
 /// run writes them), which then replaces it. Throws, naming the file, if the cut file does not hold them whole;
 /// the cut file is then left as it was.
 void rebuild_trajectory(const std::string& path, const System& sys, const Scene& scene, const RunParameters& run,
                         long keep_frames, long keep_events);
-/// Whether HDF5 opens `path` for appending (false for a trajectory cut short).
+/// Whether `path` may be appended to: its writer closed it (it left no PATH.writing beside it), and HDF5 opens it
+/// for writing (not a trajectory cut short).
 bool trajectory_opens_for_append(const std::string& path);
 
 }  // namespace pmfrag
