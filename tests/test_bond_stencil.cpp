@@ -10,10 +10,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <stdexcept>
 #include <vector>
 
 using namespace pmfrag;
@@ -49,8 +51,8 @@ TEST(BondStencil, MergedOffsetsGiveTheForcesOfOneGroupPerOffset) {
   for (std::size_t b = 0; b < bi.size(); ++b)
     if (broken(rng)) {
       alive[b] = false;
-      merged.set_alive(b, false);
-      separate.set_alive(b, false);
+      merged.set_alive(bi[b], bj[b], false);
+      separate.set_alive(bi[b], bj[b], false);
     }
   const PairLaw& law = sys.laws[0];
   ASSERT_EQ(law.p, 7);
@@ -136,7 +138,7 @@ TEST(BondStencil, SeveralLawsGiveEachBondItsOwnLaw) {
   std::vector<bool> alive(bi.size(), true);
   detail::BondStencil<2> stencil(n, bi, bj, blaw);
   for (std::size_t b = 0; b < bi.size(); ++b)
-    if (broken(rng)) alive[b] = false, stencil.set_alive(b, false);
+    if (broken(rng)) alive[b] = false, stencil.set_alive(bi[b], bj[b], false);
   const double cut2 = sys.cutoff * sys.cutoff, inv_rmin = INFINITY;
 
   const auto check = [&](const std::vector<PairLaw>& laws, bool vector_table) {
@@ -184,7 +186,7 @@ void check_every_law(const System& sys, std::uint64_t seed) {
   std::bernoulli_distribution broken(0.1);
   std::vector<bool> alive(bi.size(), true);
   for (std::size_t b = 0; b < bi.size(); ++b)
-    if (broken(rng)) alive[b] = false, stencil.set_alive(b, false);
+    if (broken(rng)) alive[b] = false, stencil.set_alive(bi[b], bj[b], false);
   const double cut2 = sys.cutoff * sys.cutoff, inv_rmin = INFINITY;
   for (const auto& [p, q] : std::vector<std::array<int, 2>>{
            {1, 2}, {2, 3}, {3, 5}, {4, 9}, {5, 10}, {6, 12}, {7, 14}, {7, 15}, {8, 16}, {13, 14}, {14, 15},
@@ -219,4 +221,45 @@ void check_every_law(const System& sys, std::uint64_t seed) {
 TEST(BondStencil, EveryLawOfTheSweepsMatchesItsPlainForce) {
   check_every_law<2>(build_system(read_scene(test::case_path("slit_plate_7_14.toml"))), 21);
   check_every_law<3>(build_system(read_scene(test::case_path("block3d_slit.toml"), {"body.0.slits=[]"})), 22);
+}
+
+TEST(BondStencil, OneLawLayoutAndBondLookupGiveTheSameForces) {
+  // The slit plate's bonds, plus five far-reaching ones whose offsets no sweep takes (off the stencil, like
+  // bonds between bodies): set_alive finds those by bisection and the rest by offset. A stencil that keeps no
+  // law per bond (one phase) must give the bits of one that does.
+  const Scene sc = read_scene(test::case_path("slit_plate_7_14.toml"));
+  System sys = build_system(sc);
+  const std::size_t n = sys.size();
+  std::mt19937_64 rng(5);
+  const std::vector<double> x = jittered(sys, 2, rng);
+  std::vector<std::array<int, 2>> bonds = sys.bonds;
+  for (int k = 0; k < 5; ++k) bonds.push_back({100 * k, 100 * k + static_cast<int>(n) / 2 + k});
+  std::sort(bonds.begin(), bonds.end());
+  std::vector<int> bi, bj, blaw;
+  for (const auto& b : bonds) bi.push_back(b[0]), bj.push_back(b[1]), blaw.push_back(0);
+  detail::BondStencil<2> with_laws(n, bi, bj, blaw), one_law(n, bi, bj, blaw, false, true, false);
+  EXPECT_THROW(one_law.set_alive(0, static_cast<int>(n) - 1, false), std::logic_error) << "not a bond";
+  const PairLaw& law = sys.laws[0];
+  const detail::FixedLaw<7, 14> fixed{law.G, law.H};
+  const double cut2 = sys.cutoff * sys.cutoff;
+  detail::Team team(2);
+  std::vector<double> f(2 * n, 0.0);
+  EXPECT_GE(one_law.add_forces(team, x.data(), f.data(), fixed, cut2, INFINITY), 5) << "the far bonds are too long";
+  std::bernoulli_distribution broken(0.3);
+  for (std::size_t b = 0; b < bi.size(); ++b)
+    if (broken(rng) || bj[b] - bi[b] > 100) with_laws.set_alive(bi[b], bj[b], false), one_law.set_alive(bi[b], bj[b], false);
+  std::vector<double> fa(2 * n, 0.0), fb(2 * n, 0.0);
+  EXPECT_EQ(with_laws.add_forces(team, x.data(), fa.data(), fixed, cut2, INFINITY), 0) << "the far bonds are retired";
+  EXPECT_EQ(one_law.add_forces(team, x.data(), fb.data(), fixed, cut2, INFINITY), 0);
+  EXPECT_EQ(std::memcmp(fa.data(), fb.data(), fa.size() * sizeof(double)), 0);
+  double loaded = 0.0;
+  for (double v : fa) loaded = std::max(loaded, std::abs(v));
+  EXPECT_GT(loaded, 0.0);
+  // every bond broken through set_alive leaves no force at all: each lookup found its bond
+  for (std::size_t b = 0; b < bi.size(); ++b) one_law.set_alive(bi[b], bj[b], false);
+  std::vector<double> f0(2 * n, 0.0);
+  one_law.add_forces(team, x.data(), f0.data(), fixed, cut2, INFINITY);
+  double largest = 0.0;
+  for (double v : f0) largest = std::max(largest, std::abs(v));
+  EXPECT_EQ(largest, 0.0);
 }

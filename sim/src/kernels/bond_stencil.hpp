@@ -26,6 +26,9 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <stdexcept>
+#include <string>
+#include <utility>
 
 namespace pmfrag::detail {
 
@@ -50,14 +53,18 @@ template <int D>
 class BondStencil {
  public:
   BondStencil() = default;
-  /// bonds (i < j) with their law index; n particles. merge_offsets = false: one group per offset always (the
-  /// tests compare the two layouts).
+  /// bonds (i < j), sorted by (i, j), with their law index; n particles. merge_offsets = false: one group per
+  /// offset always (the tests compare the two layouts). per_bond_laws = false: the caller only ever passes a
+  /// single-law evaluator (FixedLaw, OneLaw), so no per-particle law index is stored (4 B per particle and
+  /// group: 12 B a particle on the plate, 32 on the 3-D block).
   BondStencil(std::size_t n, const std::vector<int>& bi, const std::vector<int>& bj, const std::vector<int>& blaw,
-              bool single_precision = false, bool merge_offsets = true) {
+              bool single_precision = false, bool merge_offsets = true, bool per_bond_laws = true) {
     n_ = n;
     single_ = single_precision;
+    if (!std::is_sorted(bi.begin(), bi.end()))
+      throw std::logic_error("BondStencil: the bonds are not sorted by their first particle");
     // per offset o = j - i (0 < o < n): flat arrays, not maps (the cutoff model builds a stencil per list)
-    std::vector<std::size_t> count(n, 0);
+    std::vector<std::uint32_t> count(n, 0);
     for (std::size_t b = 0; b < bi.size(); ++b) ++count[static_cast<std::size_t>(bj[b] - bi[b])];
     // A sweep evaluates only the runs of consecutive i that have a bond, but the assembly visits every
     // particle once per group. Measured (1 thread): an offset is worth a sweep when at least 5 % of its slots
@@ -103,7 +110,7 @@ class BondStencil {
       if (gi == groups_.size()) {
         groups_.emplace_back();
         groups_.back().alive.assign(n, 0);
-        groups_.back().law.assign(n, 0);
+        if (per_bond_laws) groups_.back().law.assign(n, 0);
         if (merge) first_taken.emplace_back(n, 0), second_taken.emplace_back(n, 0);
       }
       if (merge)
@@ -112,9 +119,10 @@ class BondStencil {
       groups_[gi].offsets.push_back(o);
       groups_[gi].max_offset = std::max(groups_[gi].max_offset, static_cast<long>(o));
       group_of[static_cast<std::size_t>(o)] = static_cast<int>(gi);
+      group_at_offset_.push_back({o, static_cast<int>(gi)});
       reach_ = std::max(reach_, static_cast<long>(o));
     }
-    loc_.resize(bi.size());
+    std::sort(group_at_offset_.begin(), group_at_offset_.end());
     std::vector<std::vector<int>> offset_at(groups_.size(), std::vector<int>(n, 0));  // per group: each bond's offset
     std::vector<int> si, sj, sl;
     for (std::size_t b = 0; b < bi.size(); ++b) {
@@ -123,11 +131,9 @@ class BondStencil {
         Group& g = groups_[static_cast<std::size_t>(gi)];
         const std::size_t i = static_cast<std::size_t>(bi[b]);
         g.alive[i] = 1;
-        g.law[i] = blaw[b];
+        if (per_bond_laws) g.law[i] = blaw[b];
         offset_at[static_cast<std::size_t>(gi)][i] = bj[b] - bi[b];
-        loc_[b] = {gi, bi[b]};
       } else {
-        loc_[b] = {-1, static_cast<int>(si.size())};
         si.push_back(bi[b]), sj.push_back(bj[b]), sl.push_back(blaw[b]);
         sparse_alive_.push_back(1);
       }
@@ -196,12 +202,26 @@ class BondStencil {
   /// Buffers the sweeps fill: one per offset, fewer where offsets were merged.
   std::size_t groups() const { return groups_.size(); }
 
-  void set_alive(std::size_t bond, bool alive) {
-    const auto [g, k] = loc_[bond];
-    if (g >= 0)
-      groups_[static_cast<std::size_t>(g)].alive[static_cast<std::size_t>(k)] = alive;
-    else
-      sparse_alive_[static_cast<std::size_t>(k)] = alive;
+  /// Marks the bond (i, j) of the constructor's list intact or not. Found from its offset (a group's bonds
+  /// are indexed by i) or, off the stencil, by bisection of the few off-stencil bonds, which keep the list's
+  /// (i, j) order: no per-bond index is kept (8 B a bond).
+  void set_alive(int i, int j, bool alive) {
+    const auto at = std::lower_bound(group_at_offset_.begin(), group_at_offset_.end(), std::pair<int, int>{j - i, -1});
+    if (at != group_at_offset_.end() && at->first == j - i) {
+      groups_[static_cast<std::size_t>(at->second)].alive[static_cast<std::size_t>(i)] = alive;
+      return;
+    }
+    std::size_t lo = 0, hi = sparse_i_.size();  // the first off-stencil bond not before (i, j)
+    while (lo < hi) {
+      const std::size_t mid = (lo + hi) / 2;
+      if (sparse_i_[mid] < i || (sparse_i_[mid] == i && sparse_j_[mid] < j))
+        lo = mid + 1;
+      else
+        hi = mid;
+    }
+    if (lo == sparse_i_.size() || sparse_i_[lo] != i || sparse_j_[lo] != j)
+      throw std::logic_error("BondStencil::set_alive: (" + std::to_string(i) + ", " + std::to_string(j) + ") is not a bond");
+    sparse_alive_[lo] = alive;
   }
 
   /// Adds bond forces to f (N x D, interleaved), split among `team`'s threads. Returns a positive number if some intact bond was found
@@ -565,7 +585,7 @@ class BondStencil {
   bool four_ = false;                 ///< 2-D, four groups of one offset each (the plate): assemble_block_four_avx512
   std::vector<int> sparse_i_, sparse_j_, sparse_law_;  ///< off-stencil bonds
   std::vector<std::uint8_t> sparse_alive_;
-  std::vector<std::pair<int, int>> loc_;  ///< bond -> (group or -1 for off-stencil, index)
+  std::vector<std::pair<int, int>> group_at_offset_;  ///< (offset, its group), by offset
   std::vector<std::pair<std::vector<long>, std::vector<Work>>> plans_;  ///< by partition: per thread
   std::size_t current_ = 0;  ///< the prepared plan
 };

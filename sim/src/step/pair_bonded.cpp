@@ -26,7 +26,8 @@ class BondedPair final : public PairBase<D> {
   BondedPair(const System& sys, const PairSpec& spec) : Base(sys, spec, spec.contact) {
     std::vector<int> blaw(bi_.size());
     for (std::size_t b = 0; b < blaw.size(); ++b) blaw[b] = this->bond_law(b);
-    stencil_ = BondStencil<D>(n_, bi_, bj_, blaw, spec_.single_precision);
+    // one phase: with_law always passes a single-law evaluator, so the stencil keeps no law per bond
+    stencil_ = BondStencil<D>(n_, bi_, bj_, blaw, spec_.single_precision, true, this->nphase_ != 1);
     stencil_.assign_forces(true);  // stage::assigns_forces: the bonds' sum is every particle's first term
     // Original bonds come sorted by first particle (build_system): bonds [bond_from_[a], bond_from_[a + 1]).
     if (!std::is_sorted(bi_.begin(), bi_.end()))
@@ -54,7 +55,7 @@ class BondedPair final : public PairBase<D> {
   }
   void load(const double*& in, const double* end) override {
     Base::load(in, end);
-    for (std::size_t b = 0; b < alive_.size(); ++b) stencil_.set_alive(b, alive_[b]);
+    for (std::size_t b = 0; b < alive_.size(); ++b) stencil_.set_alive(bi_[b], bj_[b], alive_[b]);
   }
 
   // The bonds read positions and which bonds are intact, nothing the neighbour list keeps: they are summed
@@ -190,7 +191,7 @@ class BondedPair final : public PairBase<D> {
       const double r2 = this->bond_r2(x, b);
       if (!(r2 <= cut2)) {
         alive_[b] = 0;
-        stencil_.set_alive(b, false);
+        stencil_.set_alive(bi_[b], bj_[b], false);
         phi_break_[b] = law_potential(laws_[static_cast<std::size_t>(this->bond_law(b))], std::sqrt(r2), r_min_);
         this->record(s, b, false);
         shortest2 = std::min(shortest2, r2);
