@@ -1,8 +1,15 @@
 # Sourced by the bench scripts.
 # median: the median of the numbers on stdin, one per line.
 median() { sort -g | awk '{a[NR] = $1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
-# processor: the model name, as the operating system reports it.
-processor() { lscpu | sed -n 's/^Model name: *//p' | head -1; }
+# processor: the model name, as the operating system reports it, with its family and model (a VM's model name
+# may be as bare as "AMD EPYC", which covers Zen 3 to Zen 5).
+processor() {
+  local name family model
+  name=$(lscpu | sed -n 's/^Model name: *//p' | head -1)
+  family=$(lscpu | sed -n 's/^CPU family: *//p' | head -1)
+  model=$(lscpu | sed -n 's/^Model: *//p' | head -1)
+  echo "$name${family:+ (CPU family $family, model $model)}"
+}
 # lammps_deck PMFRAG SCENE STEPS DIR SET...: `pmfrag lammps` writes DIR/in.lammps (and its data and table) for
 # STEPS steps at the scene's own time step, with a frame only at the start (the throughput runs compare steps,
 # not output). Prints the time step [s].

@@ -7,26 +7,36 @@ set -euo pipefail
 a=$1 b=$2 src=$3
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-# scene, name, --set items: the bonded plate's quiet phase (one law: the fixed-law sweep), the inclusion (several
-# laws: the many-law sweep), the 3-D block (the 3-D stencil), each short of its first broken bond
+# scene, name, --set items: the bonded plate's quiet phase (one law: the fixed-law sweep), the same plate with a
+# law of the (p,q) sweep (its exponents from the sweep table) and with laws beyond it (run-time exponents; q = 2p
+# and not), the inclusion (several laws: the many-law sweep), the 3-D block (the 3-D stencil), each short of its
+# first broken bond
 cases=("slit_plate_7_14.toml plate time.end=5e-3"
+       "slit_plate_7_14.toml plate_4_9 phase.0.p=4 phase.0.q=9 time.dt=\"auto\" time.end=5e-3"
+       "slit_plate_7_14.toml plate_16_32 phase.0.p=16 phase.0.q=32 time.dt=\"auto\" time.end=2e-3"
+       "slit_plate_7_14.toml plate_31_64 phase.0.p=31 phase.0.q=64 time.dt=\"auto\" time.end=1e-3"
        "inclusion.toml inclusion time.end=2e-3"
        "block3d_slit.toml block time.end=2e-5")
+names=()
 for c in "${cases[@]}"; do
-  read -r scene name set <<< "$c"
+  read -r scene name rest <<< "$c"
+  read -ra items <<< "$rest"
+  names+=("$name")
+  sets=()
+  for s in "${items[@]}"; do sets+=(--set "$s"); done
   for side in a b; do
     bin=$a
     [[ $side == b ]] && bin=$b
-    "$bin" run "$src/cases/$scene" --out "$work/$name.$side" -q --force --set "$set" > /dev/null
+    "$bin" run "$src/cases/$scene" --out "$work/$name.$side" -q --force "${sets[@]}" > /dev/null
   done
 done
-/usr/bin/python3 - "$work" <<'PY'
+/usr/bin/python3 - "$work" "${names[@]}" <<'PY'
 import json, sys
 import h5py
 import numpy as np
 work = sys.argv[1]
 bad = 0
-for name in ("plate", "inclusion", "block"):
+for name in sys.argv[2:]:
     kernels, final = [], []
     for side in ("a", "b"):
         kernels.append(json.load(open(f"{work}/{name}.{side}/run.json"))["kernels"])

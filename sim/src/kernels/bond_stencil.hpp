@@ -459,6 +459,17 @@ class BondStencil {
         return;
       }
     }
+    if constexpr (std::is_same_v<Real, double> && is_one_law<Law>::value) {
+      if (const auto fixed = law.scales_ok ? fixed_sweep<D>(law.law.p, law.law.q) : nullptr) {
+        broke += fixed(x0, x1, x2, o, alive, F0, F1, F2, m, ub & 7, law.law.G, law.law.H, cut2, inv_rmin);
+        return;
+      }
+      if (law.law.q > law.law.p && law.law.p >= 1) {  // the factored form's q - p > 0
+        broke += sweep_one_law_avx512<D, Law::bits>(x0, x1, x2, o, alive, F0, F1, F2, m, ub & 7, law.law.p,
+                                                    law.law.q, law.law.G, law.law.H, cut2, inv_rmin);
+        return;
+      }
+    }
     if constexpr (std::is_same_v<Real, double> && std::is_same_v<Law, ManyLaws>) {
       if (law.table->usable) {
         broke += sweep_laws_avx512<D>(x0, x1, x2, o, alive, law.id + ub, F0, F1, F2, m, ub & 7, *law.table, cut2,

@@ -38,10 +38,12 @@ struct StencilTerm {
 
 #include "kernels/pair_kernels.hpp"  // pw<N>: GCC vector types multiply with *
 
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <type_traits>
+#include <utility>
 
 namespace pmfrag::detail {
 
@@ -165,6 +167,84 @@ inline long sweep_fixed_avx512(const double* __restrict x0, const double* __rest
   return sweep_avx512<D>(x0, x1, x2, o, alive, F0, F1, F2, m, lead, cut2, inv_rmin,
                          [vG, vH](std::ptrdiff_t, __m512d ie, __mmask8, auto) __attribute__((always_inline)) {
                            return law_magnitude_avx512<P, Q>(ie, vG, vH);
+                         });
+}
+
+/// sweep_fixed_avx512 for each law of the (p,q) sweeps, 1 <= p < q <= fixed_sweep_max_q (cases/sweep_pq.toml's
+/// p = 1..14, q = p+1..15), looked up by p and q at run time: their exponents known at compile time, these laws
+/// run as fast as the paper's three (tested against the plain force like every law). The run-time branches on
+/// the exponents' bits in law_magnitude_avx512 below cost 10-15 % of a step; 105 instantiations per dimension
+/// buy them back for the laws users sweep.
+inline constexpr int fixed_sweep_max_q = 15;
+template <int D>
+using FixedSweep = long (*)(const double* __restrict, const double* __restrict, const double* __restrict, std::size_t,
+                            const std::uint8_t* __restrict, double* __restrict, double* __restrict,
+                            double* __restrict, std::size_t, std::size_t, double, double, double, double);
+template <int D, int K>
+constexpr FixedSweep<D> fixed_sweep_of() {  // K = 16 p + q
+  constexpr int p = K / 16, q = K % 16;
+  if constexpr (p >= 1 && p < q)
+    return &sweep_fixed_avx512<D, p, q>;
+  else
+    return nullptr;
+}
+template <int D, int... K>
+constexpr std::array<FixedSweep<D>, sizeof...(K)> fixed_sweeps(std::integer_sequence<int, K...>) {
+  return {fixed_sweep_of<D, K>()...};
+}
+/// The sweep of law (p,q), or nullptr outside the table.
+template <int D>
+inline FixedSweep<D> fixed_sweep(int p, int q) {
+  static_assert(fixed_sweep_max_q < 16);
+  static constexpr auto table = fixed_sweeps<D>(std::make_integer_sequence<int, 256>{});
+  if (p < 1 || q <= p || q > fixed_sweep_max_q) return nullptr;
+  return table[static_cast<std::size_t>(16 * p + q)];
+}
+
+/// The (p,q) law's |F| for exponents known at run time, p and q - p below 2^Bits, from s ie (s = 16): the same
+/// factored form as law_magnitude_avx512, with ie^p and ie^(q-p) from shared squarings of ie, a factor taken where
+/// an exponent has its bit set (for q = 2p, one power). The bits are the same for every bond of the law, so the
+/// branches are predicted, and a power's first factor is taken as it is (no product with 1). ie is unscaled first (one exact product):
+/// (16 ie)^63 would leave the double range some 76 decades before ie^63 does. G and H come scaled by 1/16 for
+/// the sweep's s y.
+template <int Bits>
+[[gnu::always_inline]] inline __m512d law_magnitude_avx512(__m512d s_ie, unsigned p, unsigned qp, __m512d G16,
+                                                           __m512d H16) {
+  __m512d sq = _mm512_mul_pd(s_ie, _mm512_set1_pd(0.0625));  // ie^(2^b) in round b
+  __m512d ip = sq, iq = sq;
+  if (p == qp) {  // q = 2p, as (1,2), (8,16), (16,32): one power serves both
+#pragma GCC unroll 8
+    for (int b = 0; b < Bits; ++b) {
+      const unsigned bit = 1u << b;
+      if (p & bit) ip = (p & (bit - 1u)) ? _mm512_mul_pd(ip, sq) : sq;
+      if ((p >> (b + 1)) == 0) break;
+      sq = _mm512_mul_pd(sq, sq);
+    }
+    return _mm512_mul_pd(ip, _mm512_fmsub_pd(H16, ip, G16));
+  }
+#pragma GCC unroll 8
+  for (int b = 0; b < Bits; ++b) {
+    const unsigned bit = 1u << b, below = bit - 1u;
+    if (p & bit) ip = (p & below) ? _mm512_mul_pd(ip, sq) : sq;
+    if (qp & bit) iq = (qp & below) ? _mm512_mul_pd(iq, sq) : sq;
+    if (((p | qp) >> (b + 1)) == 0) break;
+    sq = _mm512_mul_pd(sq, sq);
+  }
+  return _mm512_mul_pd(ip, _mm512_fmsub_pd(H16, iq, G16));  // > 0 repulsive
+}
+
+/// sweep_avx512 for one law of run-time exponents (1 <= p < q < 2^Bits): any law of the (p,q) sweeps, at the cost
+/// of the multiplications its exponents' bits call for.
+template <int D, int Bits>
+inline long sweep_one_law_avx512(const double* __restrict x0, const double* __restrict x1,
+                                 const double* __restrict x2, std::size_t o, const std::uint8_t* __restrict alive,
+                                 double* __restrict F0, double* __restrict F1, double* __restrict F2, std::size_t m,
+                                 std::size_t lead, int p, int q, double G, double H, double cut2, double inv_rmin) {
+  const __m512d vG = _mm512_set1_pd(G * 0.0625), vH = _mm512_set1_pd(H * 0.0625);
+  const unsigned up = static_cast<unsigned>(p), uqp = static_cast<unsigned>(q - p);
+  return sweep_avx512<D>(x0, x1, x2, o, alive, F0, F1, F2, m, lead, cut2, inv_rmin,
+                         [=](std::ptrdiff_t, __m512d ie, __mmask8, auto) __attribute__((always_inline)) {
+                           return law_magnitude_avx512<Bits>(ie, up, uqp, vG, vH);
                          });
 }
 

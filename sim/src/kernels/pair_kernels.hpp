@@ -77,7 +77,11 @@ inline void two_powers(T x, int p, int q, T& xp, T& xq) {
 /// One law with exponents known at run time, q < 2^Bits (with_law picks Bits from q).
 template <int Bits>
 struct OneLaw {
+  static constexpr int bits = Bits;
   PairLaw law;
+  /// G 2^-4(p+1) and H 2^-4(q+1), the AVX-512 sweeps' exact scalings, stay normal (once per evaluator: per
+  /// sweep, ldexp cost 4 % of a step)
+  bool scales_ok = std::isnormal(std::ldexp(law.G, -4 * (law.p + 1))) && std::isnormal(std::ldexp(law.H, -4 * (law.q + 1)));
   template <class T = double>
   T magnitude(std::size_t, T ie) const {
     T ip, iq;
@@ -87,6 +91,10 @@ struct OneLaw {
   }
   OneLaw with_ids(const int*) const { return *this; }
 };
+template <class Law>
+struct is_one_law : std::false_type {};
+template <int Bits>
+struct is_one_law<OneLaw<Bits>> : std::true_type {};
 /// Enough rounds for every exponent a law may have (max_exponent = 64).
 inline constexpr int exponent_bits = 7;
 /// The paper's three (p,q) laws; a law's family in LawTable is its index here.
