@@ -212,24 +212,16 @@ template <int Bits>
                                                            __m512d H16) {
   __m512d sq = _mm512_mul_pd(s_ie, _mm512_set1_pd(0.0625));  // ie^(2^b) in round b
   __m512d ip = sq, iq = sq;
-  if (p == qp) {  // q = 2p, as (1,2), (8,16), (16,32): one power serves both
-#pragma GCC unroll 8
-    for (int b = 0; b < Bits; ++b) {
-      const unsigned bit = 1u << b;
-      if (p & bit) ip = (p & (bit - 1u)) ? _mm512_mul_pd(ip, sq) : sq;
-      if ((p >> (b + 1)) == 0) break;
-      sq = _mm512_mul_pd(sq, sq);
-    }
-    return _mm512_mul_pd(ip, _mm512_fmsub_pd(H16, ip, G16));
-  }
+  const bool one_power = p == qp;  // q = 2p, as (1,2), (8,16), (16,32): ie^p serves both
 #pragma GCC unroll 8
   for (int b = 0; b < Bits; ++b) {
     const unsigned bit = 1u << b, below = bit - 1u;
     if (p & bit) ip = (p & below) ? _mm512_mul_pd(ip, sq) : sq;
-    if (qp & bit) iq = (qp & below) ? _mm512_mul_pd(iq, sq) : sq;
+    if (!one_power && (qp & bit)) iq = (qp & below) ? _mm512_mul_pd(iq, sq) : sq;
     if (((p | qp) >> (b + 1)) == 0) break;
     sq = _mm512_mul_pd(sq, sq);
   }
+  if (one_power) iq = ip;
   return _mm512_mul_pd(ip, _mm512_fmsub_pd(H16, iq, G16));  // > 0 repulsive
 }
 
