@@ -96,6 +96,18 @@ for sig in INT KILL; do
   done
   [ $same -eq 1 ] && echo "cutoff plate: SIG$sig after ${delay}s of ${wall}s, resumed identically"
 done
+# The same plate interrupted at a fixed step, between two builds of its neighbour list just after the first
+# break (a SIGINT at this step resumed 1.95e-14 cm apart while the resumed run built a new list), and resumed
+# on any number of threads.
+rm -rf "$work/ccut"
+PMFRAG_TEST_STOP_AT_STEP=94208 "$pmfrag" run "$plate" --out "$work/ccut" -q --threads 1 "${cutoff[@]}" > /dev/null 2>&1
+grep -q '"interrupted": true' "$work/ccut/run.json" || { echo "FAIL: the run was not stopped at step 94208"; fail=1; }
+"$pmfrag" run --resume "$work/ccut" -q > /dev/null || { echo "FAIL: cutoff resume (step 94208)"; fail=1; }
+same=1
+for obj in /particles/all/position /particles/all/velocity /observables /connectivity; do
+  h5diff -q "$work/cwhole/trajectory.h5" "$work/ccut/trajectory.h5" "$obj" "$obj" || { echo "FAIL: $obj differs after cutoff resume (step 94208)"; fail=1; same=0; }
+done
+[ $same -eq 1 ] && echo "cutoff plate: stopped at step 94208, resumed identically"
 out=$("$pmfrag" run --resume "$work/cut")
 echo "$out" | grep -q "already finished" || { echo "FAIL: finished run not recognised: $out"; fail=1; }
 [ $fail -eq 0 ] && echo "resume is bitwise identical"

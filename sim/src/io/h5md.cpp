@@ -862,9 +862,9 @@ std::string H5mdReader::incomplete() const {
   return H5Lexists(file_, "/parameters/incomplete", H5P_DEFAULT) > 0 ? read_string(file_, "/parameters/incomplete") : "";
 }
 
-// The layout of a checkpoint's "effects": 2 lists only the bonds not intact (PairBase::save); before it,
-// every bond's state was written.
-constexpr long checkpoint_effects_layout = 2;
+// The layout of a checkpoint's "effects": 3 adds the neighbour list's build (PairBase::save_list); 2 lists
+// only the bonds not intact (PairBase::save); before it, every bond's state was written.
+constexpr long checkpoint_effects_layout = 3;
 
 void write_checkpoint(const std::string& path, const Checkpoint& c) {
   if (c.velocity.size() != c.position.size()) throw std::logic_error(path + ": checkpoint velocities and positions differ in count");

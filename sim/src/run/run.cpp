@@ -281,6 +281,9 @@ RunResult run_dim(const Scene& scene, System&& sys, const RunOptions& opt, const
       res.output_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     };
     if (!from) timed([&] { out.frame(); });
+    // For tests: an interruption at the first step past this one, as a SIGINT there would (tests/resume_test.sh)
+    const char* stop_env = std::getenv("PMFRAG_TEST_STOP_AT_STEP");
+    const long stop_at_step = stop_env ? std::atol(stop_env) : -1;
     while (!done()) {
       bool frame_due = false, take_checkpoint = false;
       if (adaptive) {
@@ -322,6 +325,7 @@ RunResult run_dim(const Scene& scene, System&& sys, const RunOptions& opt, const
       if (take_checkpoint) lf.canonicalize();
       if (frame_due) timed([&] { out.frame(); });
       if (take_checkpoint) timed([&] { out.checkpoint(levels); });
+      if (stop_at_step >= 0 && k >= stop_at_step) stop_requested = 1;
       if (stop_requested && !done()) {
         // Interrupted: keep the frames written and checkpoint this step so --resume continues from here.
         timed([&] { out.checkpoint(levels); });

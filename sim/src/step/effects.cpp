@@ -85,10 +85,10 @@ class Kinematic final : public Effect<D> {
   void observe(const State<D>& s, Observables& o) const override {
     o.boundary_work += left_sum_ + 0.5 * s.dt * (g_ - g0_);
   }
-  void save(std::vector<double>& out) const override {
+  void save(const State<D>&, std::vector<double>& out) const override {
     out.insert(out.end(), {left_sum_, g0_, g_, static_cast<double>(tallied_step_)});
   }
-  std::size_t saved_size() const override { return 4; }
+  std::size_t saved_size(const State<D>&) const override { return 4; }
   void load(const double*& in, const double* end) override {
     if (end - in < 4) throw std::runtime_error("checkpoint does not match the scene (boundary work)");
     left_sum_ = *in++, g0_ = *in++, g_ = *in++;

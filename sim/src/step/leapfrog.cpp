@@ -448,9 +448,9 @@ template <int D>
 std::vector<double> Leapfrog<D>::effect_state() const {
   std::vector<double> out;
   std::size_t size = 0;  // one allocation: at millions of bonds, growth by doubling held up to 3x the state
-  for (const auto& e : effects_) size += e->saved_size();
+  for (const auto& e : effects_) size += e->saved_size(s_);
   out.reserve(size);
-  for (const auto& e : effects_) e->save(out);
+  for (const auto& e : effects_) e->save(s_, out);
   assert(out.size() == size && "an effect's saved_size() disagrees with its save()");
   return out;
 }

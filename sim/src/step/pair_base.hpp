@@ -16,6 +16,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <unordered_map>
 #include <utility>
@@ -59,7 +60,7 @@ class PairBase : public Effect<D> {
   // History for a checkpoint; the layout is the same for both readings. Only the bonds not intact (the
   // cutoff model: not within D) are listed, ascending, each with phi at its break: a closing checkpoint of
   // the whole bond state, two doubles a bond, was the peak of a run's memory at millions of bonds.
-  void save(std::vector<double>& out) const override {
+  void save(const State<D>& s, std::vector<double>& out) const override {
     out.push_back(static_cast<double>(first_break_step_));
     out.push_back(first_break_time_);
     out.push_back(static_cast<double>(bonds_not_intact()));
@@ -68,8 +69,11 @@ class PairBase : public Effect<D> {
     out.push_back(skin_);  // the adapted skin decides when the list is next rebuilt: part of the state
     out.push_back(static_cast<double>(broke_count_));
     out.push_back(static_cast<double>(re_formed_count_));
+    if (uses_list_) save_list(s, out);
   }
-  std::size_t saved_size() const override { return 2 * bonds_not_intact() + 6; }
+  std::size_t saved_size(const State<D>& s) const override {
+    return 2 * bonds_not_intact() + 6 + (uses_list_ ? list_saved_size(s) : 0);
+  }
   void load(const double*& in, const double* end) override {
     const auto bad = [] { return std::runtime_error("checkpoint does not match the scene (bond record)"); };
     if (end - in < 3) throw bad();
@@ -91,6 +95,7 @@ class PairBase : public Effect<D> {
     skin_ = *in++;
     broke_count_ = static_cast<long>(*in++);
     re_formed_count_ = static_cast<long>(*in++);
+    if (uses_list_) load_list(in, end);
   }
 
   // Eq. (15) at the closest approach of the pairs that act now, per law: the stiffness -dF/dr grows as a
@@ -236,6 +241,7 @@ class PairBase : public Effect<D> {
 
   void record(const State<D>& s, std::size_t b, bool re_formed) {
     events_.push_back({s.step, s.time(), static_cast<long>(b), re_formed});
+    if (uses_list_) changed_since_build_.push_back(static_cast<int>(b));
     if (re_formed) {
       ++re_formed_count_;
     } else {
@@ -280,21 +286,51 @@ class PairBase : public Effect<D> {
   }
 
   // Verlet list of pairs within reach + skin, less the pairs excluded_from_list.
-  void rebuild(const State<D>& s) {
+  void rebuild(const State<D>& s) { build_list(s.x, s.step); }
+
+  // canonicalize's list: the one this run had, if a checkpoint taken between two builds was just loaded
+  // (built again from the positions and the bonds of its build, with the bounds it had reached); else a new
+  // one. The sweeps' layout follows the list (which offsets are dense enough to sweep: pairs present but
+  // beyond reach then change the order of a particle's sum), so a list built at another step would change
+  // the trajectory's last bits.
+  void renew_list(const State<D>& s) {
+    const long builds = list_builds_;
+    if (!pending_build_) {
+      rebuild(s);
+      if (loaded_) list_builds_ = builds;  // the checkpoint's step had just built its list
+      loaded_ = false;
+      return;
+    }
+    const PendingBuild p = std::move(*pending_build_);
+    pending_build_.reset();
+    loaded_ = false;
+    for (auto b = p.changed.rbegin(); b != p.changed.rend(); ++b) alive_[static_cast<std::size_t>(*b)] ^= 1u;
+    AlignedVector<V> x(n_);
+    for (std::size_t i = 0; i < n_; ++i)
+      for (int c = 0; c < D; ++c) x[i][c] = p.x[i * D + static_cast<std::size_t>(c)];
+    build_list(x, p.built_step);
+    for (const int b : p.changed) alive_[static_cast<std::size_t>(b)] ^= 1u;
+    changed_since_build_ = p.changed;
+    list_builds_ = builds;
+    moved_bound_ = p.moved_bound, since_break_ = p.since_break, break_room_ = p.break_room, room_ = p.room;
+  }
+
+  template <class Positions>
+  void build_list(const Positions& xs, long step) {
     ++list_builds_;
     list_.clear();
+    changed_since_build_.clear();
     const Exclusions excluded = excluded_from_list();
     std::vector<std::pair<int, int>> found;
-    cells_.for_each_pair(s.x, max_reach_ + skin_, [&](std::uint32_t a, std::uint32_t b, double) {
+    cells_.for_each_pair(xs, max_reach_ + skin_, [&](std::uint32_t a, std::uint32_t b, double) {
       if (excluded.start) {
         for (int e = excluded.start[a]; e < excluded.start[a + 1]; ++e)
           if (excluded.other[e] == static_cast<int>(b) && (!excluded.keep || excluded.keep[e])) return;
       }
       found.push_back({static_cast<int>(a), static_cast<int>(b)});
     });
-    // Sorted, so the order in which each particle sums its active pairs does not depend on when the list was
-    // built (pairs beyond reach add exactly zero): contact forces are then independent of rebuild timing.
-    // By first particle with a counting sort, then each particle's few partners (a std::sort of the whole
+    // Sorted, so the list does not depend on the order of the cells' pairs (the sweeps' layout still depends
+    // on which pairs the list holds: see renew_list). By first particle with a counting sort, then each particle's few partners (a std::sort of the whole
     // list was 15 % of the broken cutoff plate's run).
     ByFirst pairs = by_first(found);
     for (std::size_t a = 0; a < n_; ++a) {
@@ -308,8 +344,48 @@ class PairBase : public Effect<D> {
     room_ = skin_;
     since_break_ = 0.0;
     break_room_ = std::numeric_limits<double>::infinity();
-    built_step_ = s.step;
-    x_build_.assign(s.x.front().data(), s.x.front().data() + s.size() * D);
+    built_step_ = step;
+    x_build_.assign(xs.front().data(), xs.front().data() + n_ * D);
+  }
+
+  // The list's part of a checkpoint: its build count, and whether it was built at this step (a checkpoint
+  // step rebuilds it: canonicalize). If not, what renew_list needs to build it again as it was: the build's
+  // step and positions (N x D), the bounds since, and the bonds whose state changed since (they were
+  // left out of the list, or not, as they were then).
+  bool list_built_now(const State<D>& s) const { return built_step_ == s.step; }
+  std::size_t list_saved_size(const State<D>& s) const {
+    return 2 + (list_built_now(s) ? 0 : 6 + changed_since_build_.size() + x_build_.size());
+  }
+  void save_list(const State<D>& s, std::vector<double>& out) const {
+    out.push_back(static_cast<double>(list_builds_));
+    out.push_back(list_built_now(s) ? 1.0 : 0.0);
+    if (list_built_now(s)) return;
+    out.insert(out.end(), {static_cast<double>(built_step_), moved_bound_, since_break_, break_room_, room_,
+                           static_cast<double>(changed_since_build_.size())});
+    for (const int b : changed_since_build_) out.push_back(static_cast<double>(b));
+    out.insert(out.end(), x_build_.begin(), x_build_.end());
+  }
+  void load_list(const double*& in, const double* end) {
+    const auto bad = [] { return std::runtime_error("checkpoint does not match the scene (neighbour list)"); };
+    if (end - in < 2) throw bad();
+    list_builds_ = static_cast<long>(*in++);
+    loaded_ = true;
+    pending_build_.reset();
+    if (*in++ != 0.0) return;
+    if (end - in < 6) throw bad();
+    PendingBuild p;
+    p.built_step = static_cast<long>(*in++);
+    p.moved_bound = *in++, p.since_break = *in++, p.break_room = *in++, p.room = *in++;
+    const double changed = *in++;
+    if (!(changed >= 0.0) || end - in < static_cast<long>(changed) + static_cast<long>(n_ * D)) throw bad();
+    for (long k = 0; k < static_cast<long>(changed); ++k) {
+      const double b = *in++;
+      if (!(b >= 0.0 && b < static_cast<double>(alive_.size()))) throw bad();
+      p.changed.push_back(static_cast<int>(b));
+    }
+    p.x.assign(in, in + n_ * D);
+    in += n_ * D;
+    pending_build_ = std::move(p);
   }
 
   /// Pairs grouped by first particle (a counting sort).
@@ -401,6 +477,15 @@ class PairBase : public Effect<D> {
   double break_room_ = std::numeric_limits<double>::infinity();  ///< cm: shortest such pair at its break, less reach
   double room_ = 0.0;  ///< cm: twice the largest residual the list allows (the skin at the build; affine_residual)
   std::vector<double> x_build_;   ///< cm: positions (N x D) at the last list build
+  std::vector<int> changed_since_build_;  ///< bonds whose state changed since the last list build, in order
+  struct PendingBuild {                   ///< a loaded checkpoint's list, for renew_list (see list_saved_size)
+    long built_step = 0;
+    double moved_bound = 0.0, since_break = 0.0, break_room = 0.0, room = 0.0;
+    std::vector<int> changed;
+    std::vector<double> x;
+  };
+  std::optional<PendingBuild> pending_build_;
+  bool loaded_ = false;  ///< a checkpoint was loaded and the list not yet renewed
   std::vector<double> moved_of_;  ///< resident steps: each thread's copies of the list's bounds (a line each)
 };
 

@@ -49,7 +49,7 @@ class BondedPair final : public PairBase<D> {
     this->rebuild(s);
   }
   void canonicalize(const State<D>& s) override {
-    if (uses_list_) this->rebuild(s);
+    if (uses_list_) this->renew_list(s);
   }
   void load(const double*& in, const double* end) override {
     Base::load(in, end);

@@ -33,7 +33,7 @@ class CutoffPair final : public PairBase<D> {
     this->rebuild(s);
   }
   void canonicalize(const State<D>& s) override {
-    this->rebuild(s);
+    this->renew_list(s);
     far_margin_ = -1.0;  // the next crossing test is a full pass, in a resumed run as in this one
   }
 

@@ -153,10 +153,10 @@ class Effect {
   /// resumed from this step is bitwise identical to one that never stopped.
   virtual void canonicalize(const State<D>&) {}
   /// History an effect carries between steps (broken bonds, tallied work), appended as doubles for a
-  /// checkpoint, and read back in the same order.
-  virtual void save(std::vector<double>&) const {}
-  /// How many values save() appends (a hint for one allocation).
-  virtual std::size_t saved_size() const { return 0; }
+  /// checkpoint of the state s, and read back in the same order.
+  virtual void save(const State<D>& /*s*/, std::vector<double>&) const {}
+  /// How many values save(s, ...) appends (a hint for one allocation).
+  virtual std::size_t saved_size(const State<D>& /*s*/) const { return 0; }
   /// Reads what save() appended from [in, end), advancing in; throws std::runtime_error if it does not fit.
   virtual void load(const double*& /*in*/, const double* /*end*/) {}
 
