@@ -294,25 +294,22 @@ class PairBase : public Effect<D> {
   // beyond reach then change the order of a particle's sum), so a list built at another step would change
   // the trajectory's last bits.
   void renew_list(const State<D>& s) {
-    const long builds = list_builds_;
-    if (!pending_build_) {
+    if (!loaded_list_) {
       rebuild(s);
-      if (loaded_) list_builds_ = builds;  // the checkpoint's step had just built its list
-      loaded_ = false;
       return;
     }
-    const PendingBuild p = std::move(*pending_build_);
-    pending_build_.reset();
-    loaded_ = false;
-    for (auto b = p.changed.rbegin(); b != p.changed.rend(); ++b) alive_[static_cast<std::size_t>(*b)] ^= 1u;
-    AlignedVector<V> x(n_);
-    for (std::size_t i = 0; i < n_; ++i)
-      for (int c = 0; c < D; ++c) x[i][c] = p.x[i * D + static_cast<std::size_t>(c)];
-    build_list(x, p.built_step);
-    for (const int b : p.changed) alive_[static_cast<std::size_t>(b)] ^= 1u;
-    changed_since_build_ = p.changed;
-    list_builds_ = builds;
-    moved_bound_ = p.moved_bound, since_break_ = p.since_break, break_room_ = p.break_room, room_ = p.room;
+    const LoadedList p = std::move(*loaded_list_);
+    loaded_list_.reset();
+    if (p.x.empty()) {  // the checkpoint's step had just built its list
+      rebuild(s);
+    } else {
+      for (auto b = p.changed.rbegin(); b != p.changed.rend(); ++b) alive_[static_cast<std::size_t>(*b)] ^= 1u;
+      build_list(p.x, p.built_step);
+      for (const int b : p.changed) alive_[static_cast<std::size_t>(b)] ^= 1u;
+      changed_since_build_ = p.changed;
+      moved_bound_ = p.moved_bound, since_break_ = p.since_break, break_room_ = p.break_room, room_ = p.room;
+    }
+    list_builds_ = p.builds;
   }
 
   template <class Positions>
@@ -330,8 +327,8 @@ class PairBase : public Effect<D> {
       found.push_back({static_cast<int>(a), static_cast<int>(b)});
     });
     // Sorted, so the list does not depend on the order of the cells' pairs (the sweeps' layout still depends
-    // on which pairs the list holds: see renew_list). By first particle with a counting sort, then each particle's few partners (a std::sort of the whole
-    // list was 15 % of the broken cutoff plate's run).
+    // on which pairs the list holds: see renew_list). By first particle with a counting sort, then each
+    // particle's few partners (a std::sort of the whole list was 15 % of the broken cutoff plate's run).
     ByFirst pairs = by_first(found);
     for (std::size_t a = 0; a < n_; ++a) {
       const auto b0 = pairs.other.begin() + pairs.start[a], b1 = pairs.other.begin() + pairs.start[a + 1];
@@ -368,24 +365,24 @@ class PairBase : public Effect<D> {
   void load_list(const double*& in, const double* end) {
     const auto bad = [] { return std::runtime_error("checkpoint does not match the scene (neighbour list)"); };
     if (end - in < 2) throw bad();
-    list_builds_ = static_cast<long>(*in++);
-    loaded_ = true;
-    pending_build_.reset();
-    if (*in++ != 0.0) return;
-    if (end - in < 6) throw bad();
-    PendingBuild p;
-    p.built_step = static_cast<long>(*in++);
-    p.moved_bound = *in++, p.since_break = *in++, p.break_room = *in++, p.room = *in++;
-    const double changed = *in++;
-    if (!(changed >= 0.0) || end - in < static_cast<long>(changed) + static_cast<long>(n_ * D)) throw bad();
-    for (long k = 0; k < static_cast<long>(changed); ++k) {
-      const double b = *in++;
-      if (!(b >= 0.0 && b < static_cast<double>(alive_.size()))) throw bad();
-      p.changed.push_back(static_cast<int>(b));
+    LoadedList p;
+    p.builds = static_cast<long>(*in++);
+    if (*in++ == 0.0) {  // built before the checkpoint's step: how it was built
+      if (end - in < 6) throw bad();
+      p.built_step = static_cast<long>(*in++);
+      p.moved_bound = *in++, p.since_break = *in++, p.break_room = *in++, p.room = *in++;
+      const double changed = *in++;
+      if (!(changed >= 0.0) || end - in < static_cast<long>(changed) + static_cast<long>(n_ * D)) throw bad();
+      for (long k = 0; k < static_cast<long>(changed); ++k) {
+        const double b = *in++;
+        if (!(b >= 0.0 && b < static_cast<double>(alive_.size()))) throw bad();
+        p.changed.push_back(static_cast<int>(b));
+      }
+      p.x.resize(n_);
+      for (std::size_t i = 0; i < n_; ++i)
+        for (int c = 0; c < D; ++c) p.x[i][c] = *in++;
     }
-    p.x.assign(in, in + n_ * D);
-    in += n_ * D;
-    pending_build_ = std::move(p);
+    loaded_list_ = std::move(p);
   }
 
   /// Pairs grouped by first particle (a counting sort).
@@ -478,14 +475,14 @@ class PairBase : public Effect<D> {
   double room_ = 0.0;  ///< cm: twice the largest residual the list allows (the skin at the build; affine_residual)
   std::vector<double> x_build_;   ///< cm: positions (N x D) at the last list build
   std::vector<int> changed_since_build_;  ///< bonds whose state changed since the last list build, in order
-  struct PendingBuild {                   ///< a loaded checkpoint's list, for renew_list (see list_saved_size)
-    long built_step = 0;
+  struct LoadedList {  ///< a loaded checkpoint's list, until renew_list (see list_saved_size)
+    long builds = 0;
+    long built_step = 0;  ///< the rest only if built before the checkpoint's step (x not empty)
     double moved_bound = 0.0, since_break = 0.0, break_room = 0.0, room = 0.0;
     std::vector<int> changed;
-    std::vector<double> x;
+    AlignedVector<V> x;
   };
-  std::optional<PendingBuild> pending_build_;
-  bool loaded_ = false;  ///< a checkpoint was loaded and the list not yet renewed
+  std::optional<LoadedList> loaded_list_;
   std::vector<double> moved_of_;  ///< resident steps: each thread's copies of the list's bounds (a line each)
 };
 
