@@ -266,34 +266,34 @@ template <int D>
 double lanczos_dt_limit(const System& sys) {
   using VecD = Eigen::Matrix<double, D, 1>;
   const std::size_t n = sys.size();
-  // A spring is its direction and stiffness; its ends are the System's bond (no copy of i, j: 8 B a bond, a
-  // fifth of the peak memory of a 3-D body's setup).
-  struct Spring {
-    VecD e;
-    double k;
+  // A spring is its stiffness; its ends are the System's bond, and its direction is made again from the
+  // positions in each product, by the same operations, so to the same bits. Keeping the directions would
+  // cost D doubles a bond (48 B a particle in 2-D, 144 B in 3-D), the largest part of the setup's peak memory;
+  // making them costs about a tenth more time here (docs/performance.md, "Memory at millions of particles").
+  const auto direction = [&](std::size_t i, std::size_t j) -> VecD {
+    // In 2-D the third component is zero: it adds nothing to the norm, so it is left out.
+    const VecD d = (sys.position[j] - sys.position[i]).template head<D>();
+    return d / d.norm();
   };
-  std::vector<Spring> springs;
-  springs.reserve(sys.bonds.size());
+  std::vector<double> stiffness;
+  stiffness.reserve(sys.bonds.size());
   for (const auto& b : sys.bonds) {
     const std::size_t i = static_cast<std::size_t>(b[0]), j = static_cast<std::size_t>(b[1]);
-    const Vec3 d = sys.position[j] - sys.position[i];
-    const double r = d.norm();
-    const double k = std::max(0.0, sys.law(sys.phase[i], sys.phase[j]).stiffness(r));
-    const Vec3 e = d / r;
-    springs.push_back({e.head<D>(), k});
+    const double r = (sys.position[j] - sys.position[i]).norm();
+    stiffness.push_back(std::max(0.0, sys.law(sys.phase[i], sys.phase[j]).stiffness(r)));
   }
   std::vector<double> w_of_phase(sys.phase_mass.size());  // M^-1/2, looked up by phase (not an N-long array)
   for (std::size_t a = 0; a < w_of_phase.size(); ++a) w_of_phase[a] = 1.0 / std::sqrt(sys.phase_mass[a]);
   const auto apply = [&](const std::vector<VecD>& v, std::vector<VecD>& Av) {
     std::fill(Av.begin(), Av.end(), VecD::Zero());
-    for (std::size_t b = 0; b < springs.size(); ++b) {
-      const Spring& s = springs[b];
+    for (std::size_t b = 0; b < stiffness.size(); ++b) {
       const std::size_t i = static_cast<std::size_t>(sys.bonds[b][0]), j = static_cast<std::size_t>(sys.bonds[b][1]);
+      const VecD e = direction(i, j);
       const double wi = w_of_phase[static_cast<std::size_t>(sys.phase[i])];
       const double wj = w_of_phase[static_cast<std::size_t>(sys.phase[j])];
-      const double t = s.k * s.e.dot(wi * v[i] - wj * v[j]);
-      Av[i] += (wi * t) * s.e;
-      Av[j] -= (wj * t) * s.e;
+      const double t = stiffness[b] * e.dot(wi * v[i] - wj * v[j]);
+      Av[i] += (wi * t) * e;
+      Av[j] -= (wj * t) * e;
     }
   };
   std::vector<VecD> q(n, VecD::Zero()), q_prev(n, VecD::Zero()), r(n);
