@@ -69,6 +69,26 @@ for obj in /particles/all/position /particles/all/velocity /observables /connect
   h5diff -q "$work/awhole/trajectory.h5" "$work/acut/trajectory.h5" "$obj" "$obj" || { echo "FAIL: $obj differs after adaptive resume"; fail=1; }
 done
 echo "adaptive: $(grep -o '"steps": [0-9]*' "$work/awhole/run.json"), resumed identically"
+# A killed writer whose trajectory holds fewer whole frames than its checkpoint counts (here frame 3's bytes
+# altered, so its checksum fails): --resume says so and runs again from step 0, bitwise the uninterrupted run.
+rm -rf "$work/adamaged"
+PMFRAG_TEST_STOP_AT_STEP=2000 "$pmfrag" run "$scene" --out "$work/adamaged" -q "${adaptive[@]}" > /dev/null 2>&1
+/usr/bin/python3 - "$work/adamaged/trajectory.h5" <<'PY'
+import sys, h5py
+with h5py.File(sys.argv[1], "r") as f:
+    at = f["particles/all/position/value"].id.get_chunk_info_by_coord((3, 0, 0)).byte_offset + 100
+with open(sys.argv[1], "r+b") as g:
+    g.seek(at); b = g.read(1); g.seek(at); g.write(bytes([b[0] ^ 0xFF]))
+PY
+touch "$work/adamaged/trajectory.h5.writing"  # as a writer killed before closing it leaves
+err=$("$pmfrag" run --resume "$work/adamaged" -q 2>&1 > /dev/null) || { echo "FAIL: resume of a damaged trajectory: $err"; fail=1; }
+echo "$err" | grep -q "frame 3 of the .* does not read back.*starting the run over" ||
+  { echo "FAIL: resume did not say why it started over: $err"; fail=1; }
+same=1
+for obj in /particles/all/position /particles/all/velocity /observables /connectivity; do
+  h5diff -q "$work/awhole/trajectory.h5" "$work/adamaged/trajectory.h5" "$obj" "$obj" || { echo "FAIL: $obj differs after the run started over"; fail=1; same=0; }
+done
+[ $same -eq 1 ] && echo "adaptive, frame 3 damaged before the checkpoint: started over, identical"
 # The cutoff reading's Verlet skin adapts to how long lists last (the broken plate widens it): the skin is part of
 # the checkpoint. The (7,14) cutoff plate breaks near 1.0e-2 s; it is stopped at 85 % (SIGINT) and 80 % (SIGKILL)
 # of an uninterrupted run's wall time, past the break on any machine speed. (Fails if the skin is not restored.)

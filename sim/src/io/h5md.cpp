@@ -939,11 +939,11 @@ bool trajectory_opens_for_append(const std::string& path) {
 void rebuild_trajectory(const std::string& path, const System& sys, const Scene& scene, const RunParameters& run,
                         long keep_frames, long keep_events) {
   const std::string rebuilt = path + ".rebuilt";
-  {
+  try {
     const H5mdReader cut(path);
     const auto short_of = [&](const std::string& what) {
-      return std::runtime_error(path + ": cut short (" + cut.damage() + "), and " + what +
-                                ": cannot resume; run the scene again with --force");
+      return TrajectoryShortOfCheckpoint(path + ": cut short (" + (cut.damage().empty() ? "not closed" : cut.damage()) +
+                                         "), and " + what);
     };
     if (cut.frames() < keep_frames)
       throw short_of("it holds " + std::to_string(cut.frames()) + " whole frames of the " +
@@ -957,15 +957,25 @@ void rebuild_trajectory(const std::string& path, const System& sys, const Scene&
       series[name] = cut.observable(name);
       if (static_cast<long>(series[name].size()) < keep_frames) throw short_of(std::string("its ") + name + " is short");
     }
-    H5mdWriter out(rebuilt, sys, scene, run);
+    // A frame the reader cannot read back (a checksum that fails) ends what is whole.
+    const auto read_frame = [&](long k, TrajectoryFrame& f) {
+      try {
+        cut.frame(k, f);
+      } catch (const std::runtime_error& e) {
+        throw short_of("frame " + std::to_string(k) + " of the " + std::to_string(keep_frames) +
+                       " the checkpoint counts does not read back (" + e.what() + ")");
+      }
+    };
     TrajectoryFrame f;
+    if (keep_frames > 0) read_frame(keep_frames - 1, f);  // the likeliest to be damaged: before any is copied
+    H5mdWriter out(rebuilt, sys, scene, run);
     long row = 0;
     const auto events_up_to = [&](long end) {
       out.append_bond_events(std::vector<BondEvent>(record.events.begin() + row, record.events.begin() + end));
       row = end;
     };
     for (long k = 0; k < keep_frames; ++k) {
-      cut.frame(k, f);
+      read_frame(k, f);
       events_up_to(record.rows_at_frame[static_cast<std::size_t>(k)]);
       const auto at = [&](const char* name) { return series[name][static_cast<std::size_t>(k)]; };
       Observables obs;
@@ -977,6 +987,9 @@ void rebuild_trajectory(const std::string& path, const System& sys, const Scene&
     events_up_to(keep_events);
     out.flush();
     out.close();
+  } catch (...) {
+    std::remove(rebuilt.c_str());  // half a copy is no use; the cut file is as it was
+    throw;
   }
   if (std::rename(rebuilt.c_str(), path.c_str()) != 0)
     throw std::runtime_error(path + ": cannot replace with " + rebuilt + ": " + std::strerror(errno));

@@ -464,8 +464,16 @@ RunResult resume_run(const RunOptions& opt) {
   const Checkpoint c = read_checkpoint(ckpt.string());
   System sys = build_system(scene);
   const StepChoice choice = choose_step(scene, sys);
-  if (scene.dim == 2) return run_dim<2>(scene, std::move(sys), o, choice, &c, started);
-  return run_dim<3>(scene, std::move(sys), o, choice, &c, started);
+  try {
+    if (scene.dim == 2) return run_dim<2>(scene, std::move(sys), o, choice, &c, started);
+    return run_dim<3>(scene, std::move(sys), o, choice, &c, started);
+  } catch (const TrajectoryShortOfCheckpoint& e) {
+    // The frames the checkpoint counts are not all on disk whole: a run from step 0 writes them again, bitwise
+    // the same (runs are deterministic on any thread count), rather than a trajectory with a hole.
+    std::fprintf(stderr, "pmfrag: %s: starting the run over\n", e.what());
+    o.force = true;
+    return start_run(scene, o, false, started);
+  }
 }
 
 // A new run's folder: refuses to overwrite a trajectory without --force, clears the old run's record and

@@ -155,12 +155,17 @@ void write_checkpoint(const std::string& path, const Checkpoint& c, const double
                       std::size_t values);
 Checkpoint read_checkpoint(const std::string& path);
 
+/// A cut trajectory holds fewer whole frames (or bond-record rows) than its checkpoint counts.
+struct TrajectoryShortOfCheckpoint : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 /// Resume after a full disk or a killed writer: HDF5 cannot reopen for appending a trajectory whose end the disk
 /// cut off, and one whose writer died between flushes may hold half of a frame's metadata. Its first
 /// `keep_frames` frames and `keep_events` rows of the bond record (what the checkpoint counts), read back from
 /// the cut file, are written into a new trajectory (the time-independent data from sys, scene and run, as a new
-/// run writes them), which then replaces it. Throws, naming the file, if the cut file does not hold them whole;
-/// the cut file is then left as it was.
+/// run writes them), which then replaces it. Throws TrajectoryShortOfCheckpoint, naming the file and what is
+/// missing, if the cut file does not hold them whole; the cut file is then left as it was.
 void rebuild_trajectory(const std::string& path, const System& sys, const Scene& scene, const RunParameters& run,
                         long keep_frames, long keep_events);
 /// Whether `path` may be appended to: its writer closed it (it left no PATH.writing beside it), and HDF5 opens it
