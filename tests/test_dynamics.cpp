@@ -152,7 +152,7 @@ TEST(Dynamics, FreePlateConservesEnergyAndMomentum) {
     lf.whole_step_velocity(v);
     Eigen::Vector2d p = Eigen::Vector2d::Zero();
     double scale = 0;
-    for (std::size_t i = 0; i < v.size(); ++i) p += lf.state().mass[i] * v[i], scale += lf.state().mass[i] * v[i].norm();
+    for (std::size_t i = 0; i < v.size(); ++i) p += lf.state().masses.mass(i) * v[i], scale += lf.state().masses.mass(i) * v[i].norm();
     return std::make_pair(p, scale);
   };
   const auto [p0, pscale] = momentum();

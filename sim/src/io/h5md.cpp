@@ -113,6 +113,8 @@ void array_dataset(hid_t parent, const char* name, const std::vector<T>& v, std:
 void scalar_dataset(hid_t parent, const char* name, double value) { array_dataset<double>(parent, name, {value}, {}); }
 
 // An H5MD time-dependent element: step, time, value, each growing along the first axis.
+constexpr hsize_t frame_chunk_rows = 65536;  ///< particles per chunk of a frame (1 MiB of 2-D doubles)
+
 struct Series {
   hid_t group = -1, step = -1, time = -1, value = -1, type = -1;
   std::vector<hsize_t> shape;  // per-frame shape of value
@@ -150,9 +152,13 @@ struct Series {
     }
     return s;
   }
+  // A frame's rows go in chunks of at most frame_chunk_rows particles: HDF5 runs a chunk's filters (the
+  // checksum, deflate) on a buffer of the whole chunk, so with a chunk per frame it held a copy of every frame
+  // while writing it (16 B a particle in 2-D); and the frame's velocities can be computed a chunk at a time.
   static hid_t grow(hid_t g, const char* name, hid_t t, const std::vector<hsize_t>& frame, int gzip = 0) {
     std::vector<hsize_t> dims{0}, maxd{H5S_UNLIMITED}, chunk{frame.empty() ? hsize_t(256) : hsize_t(1)};
     for (auto s : frame) dims.push_back(s), maxd.push_back(s), chunk.push_back(s);
+    if (chunk.size() > 1) chunk[1] = std::max<hsize_t>(1, std::min(chunk[1], frame_chunk_rows));
     hid_t space = H5Screate_simple(static_cast<int>(dims.size()), dims.data(), maxd.data());
     hid_t plist = H5Pcreate(H5P_DATASET_CREATE);
     H5Pset_chunk(plist, static_cast<int>(chunk.size()), chunk.data());
@@ -184,6 +190,26 @@ struct Series {
     append(step, index, {}, H5T_NATIVE_LONG, &s);
     append(time, index, {}, H5T_NATIVE_DOUBLE, &t);
     append(value, index, shape, type, data);
+  }
+  // The same for an N x dim frame of doubles whose rows come from `rows` a chunk at a time (one chunk's buffer).
+  void append_rows(hsize_t index, long s, double t, const H5mdWriter::FrameRows& rows) {
+    append(step, index, {}, H5T_NATIVE_LONG, &s);
+    append(time, index, {}, H5T_NATIVE_DOUBLE, &t);
+    const hsize_t n = shape.at(0), dim = shape.at(1);
+    std::vector<hsize_t> dims{index + 1, n, dim};
+    check(H5Dset_extent(value, dims.data()), "extend");
+    std::vector<double> buffer(static_cast<std::size_t>(std::min(n, frame_chunk_rows) * dim));
+    for (hsize_t first = 0; first < n; first += frame_chunk_rows) {
+      const hsize_t count = std::min(frame_chunk_rows, n - first);
+      rows(static_cast<std::size_t>(first), static_cast<std::size_t>(count), buffer.data());
+      const hsize_t start[3] = {index, first, 0}, cnt[3] = {1, count, dim};
+      hid_t fspace = H5Dget_space(value);
+      H5Sselect_hyperslab(fspace, H5S_SELECT_SET, start, nullptr, cnt, nullptr);
+      hid_t mspace = H5Screate_simple(3, cnt, nullptr);
+      const herr_t ok = H5Dwrite(value, H5T_NATIVE_DOUBLE, mspace, fspace, H5P_DEFAULT, buffer.data());
+      H5Sclose(mspace), H5Sclose(fspace);
+      check(ok, "write frame");
+    }
   }
   void close() {
     if (group < 0) return;
@@ -464,6 +490,17 @@ bool H5mdWriter::writes_velocity() const { return impl_->velocity.group >= 0; }
 
 void H5mdWriter::write_frame(long step, double time, const double* position, const double* velocity,
                              const Observables& obs) {
+  if (impl_->velocity.group >= 0 && !velocity)
+    throw std::logic_error(impl_->path + ": a frame without the velocities this trajectory stores");
+  const std::size_t dim = impl_->velocity.group >= 0 ? static_cast<std::size_t>(impl_->velocity.shape.at(1)) : 0;
+  write_frame(step, time, position, FrameRows([&](std::size_t first, std::size_t count, double* out) {
+                std::copy(velocity + first * dim, velocity + (first + count) * dim, out);
+              }),
+              obs);
+}
+
+void H5mdWriter::write_frame(long step, double time, const double* position, const FrameRows& velocity,
+                             const Observables& obs) {
   auto& m = *impl_;
   if (m.velocity.group >= 0 && !velocity)
     throw std::logic_error(m.path + ": a frame without the velocities this trajectory stores");
@@ -477,12 +514,12 @@ void H5mdWriter::write_frame(long step, double time, const double* position, con
   }
 }
 
-void H5mdWriter::append_frame(long step, double time, const double* position, const double* velocity,
+void H5mdWriter::append_frame(long step, double time, const double* position, const FrameRows& velocity,
                               const Observables& obs) {
   auto& m = *impl_;
   const hsize_t k = static_cast<hsize_t>(frames_);
   m.position.append(k, step, time, position);
-  if (m.velocity.group >= 0) m.velocity.append(k, step, time, velocity);
+  if (m.velocity.group >= 0) m.velocity.append_rows(k, step, time, velocity);
   const double total = obs.kinetic + obs.potential;
   const double beyond = static_cast<double>(obs.pairs_beyond_cutoff);
   const double balance = obs.balance();
@@ -590,7 +627,8 @@ std::uint64_t stored_eof(const std::string& path) {
   return v;
 }
 
-// Whether frame `index` of a per-frame-chunked dataset, or entry `index` of a series, lies before `limit`.
+// Whether frame `index` of a frame-chunked dataset (all the chunks of its rows), or entry `index` of a series,
+// lies before `limit`.
 bool chunk_before(hid_t file, const char* path, hsize_t index, std::uint64_t limit) {
   hid_t d = H5Dopen2(file, path, H5P_DEFAULT);
   if (d < 0) return false;
@@ -598,13 +636,19 @@ bool chunk_before(hid_t file, const char* path, hsize_t index, std::uint64_t lim
   hsize_t chunk[4] = {1, 1, 1, 1};
   const int rank = H5Pget_chunk(dcpl, 4, chunk);
   H5Pclose(dcpl);
-  hsize_t offset[4] = {0, 0, 0, 0};
-  offset[0] = rank > 0 ? index / chunk[0] * chunk[0] : 0;
-  unsigned mask = 0;
-  haddr_t addr = HADDR_UNDEF;
-  hsize_t size = 0;
-  const bool ok = rank > 0 && H5Dget_chunk_info_by_coord(d, offset, &mask, &addr, &size) >= 0 && addr != HADDR_UNDEF &&
-                  addr + size <= limit;
+  const auto dims = dims_of(d);
+  const hsize_t rows = rank > 1 ? dims.at(1) : 1, step = rank > 1 ? chunk[1] : 1;
+  bool ok = rank > 0;
+  for (hsize_t first = 0; ok && first < rows; first += step) {
+    hsize_t offset[4] = {0, 0, 0, 0};
+    offset[0] = index / chunk[0] * chunk[0];
+    if (rank > 1) offset[1] = first;
+    unsigned mask = 0;
+    haddr_t addr = HADDR_UNDEF;
+    hsize_t size = 0;
+    ok = H5Dget_chunk_info_by_coord(d, offset, &mask, &addr, &size) >= 0 && addr != HADDR_UNDEF &&
+         addr + size <= limit;
+  }
   H5Dclose(d);
   return ok;
 }

@@ -72,8 +72,11 @@ class RunOutput {
     failing_write_says_what_is_kept([&] {
       record_events();
       const auto& s = lf_.state();
-      if (writer_.writes_velocity()) lf_.whole_step_velocity(v_);
-      writer_.write_frame(s.step, s.time(), s.x.data()->data(), v_.empty() ? nullptr : v_.data()->data(), lf_.observe());
+      // velocities a chunk of the file at a time: no N x D array of them
+      const H5mdWriter::FrameRows velocity = [&](std::size_t first, std::size_t count, double* out) {
+        lf_.whole_step_velocity(first, count, out);
+      };
+      writer_.write_frame(s.step, s.time(), s.x.data()->data(), velocity, lf_.observe());
       last_frame_time_ = s.time();
     });
   }
@@ -124,7 +127,6 @@ class RunOutput {
   H5mdWriter& writer_;
   Leapfrog<D>& lf_;
   std::string checkpoint_path_;
-  std::vector<Eigen::Matrix<double, D, 1>> v_;
   std::vector<BondEvent> events_;
 };
 

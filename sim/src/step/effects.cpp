@@ -44,7 +44,7 @@ class Kinematic final : public Effect<D> {
   std::string name() const override { return "kinematic"; }
   unsigned stages() const override { return stage::setup | stage::force | stage::observe | stage::resident; }
   void setup(State<D>& s) override {
-    for (int i : index_) s.v[static_cast<std::size_t>(i)] = u_, s.inv_mass[static_cast<std::size_t>(i)] = 0.0;
+    for (int i : index_) s.v[static_cast<std::size_t>(i)] = u_, s.masses.prescribe(static_cast<std::size_t>(i));
   }
   // A plain step is a resident block of one step on one thread: the tally is written once.
   void add_forces(State<D>& s) override {
@@ -160,7 +160,7 @@ class Gravity final : public Effect<D> {
   }
   void observe(const State<D>& s, Observables& o) const override {
     double pe = 0.0;  // -m g . x
-    for (std::size_t k = 0; k < s.size(); ++k) pe -= s.mass[k] * g_.dot(s.x[k]);
+    for (std::size_t k = 0; k < s.size(); ++k) pe -= s.masses.mass(k) * g_.dot(s.x[k]);
     o.potential += pe;
   }
 

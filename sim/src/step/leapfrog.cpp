@@ -60,13 +60,10 @@ State<D> initial_state(const System& sys) {
   s.r0 = sys.r0;
   s.x.resize(n);
   s.v.resize(n);
-  s.mass.resize(n);
-  s.inv_mass.resize(n);
+  s.masses = ParticleMasses(sys.phase_mass, sys.phase);
   for (std::size_t i = 0; i < n; ++i) {
     s.x[i] = sys.position[i].head<D>();
     s.v[i] = sys.velocity[i].head<D>();
-    s.mass[i] = sys.phase_mass[static_cast<std::size_t>(sys.phase[i])];
-    s.inv_mass[i] = 1.0 / s.mass[i];
   }
   return s;
 }
@@ -115,7 +112,7 @@ Leapfrog<D>::Leapfrog(State<D> initial, std::vector<std::unique_ptr<Effect<D>>> 
   // the runs are short against a vector does it read one inverse mass per component.
   for (std::size_t i = 0; i < n; ++i) {
     const long b = static_cast<long>(i) * D;
-    const double m = s_.inv_mass[i];
+    const double m = s_.masses.inv_mass(i);
     const bool same = !mass_runs_.empty() && mass_runs_.back().inv_mass == m &&
                       std::signbit(mass_runs_.back().inv_mass) == std::signbit(m);  // the same bits
     if (!same)
@@ -126,7 +123,7 @@ Leapfrog<D>::Leapfrog(State<D> initial, std::vector<std::unique_ptr<Effect<D>>> 
   if (mass_runs_.size() > 8 + n * D / 256) {
     mass_runs_.clear();
     inv_mass_dof_.resize(n * D);
-    for (std::size_t j = 0; j < n * D; ++j) inv_mass_dof_[j] = s_.inv_mass[j / D];
+    for (std::size_t j = 0; j < n * D; ++j) inv_mass_dof_[j] = s_.masses.inv_mass(j / D);
   }
   compute_forces();
 }
@@ -416,10 +413,15 @@ long Leapfrog<D>::resident_steps(detail::Team& team, long steps) {
 
 template <int D>
 void Leapfrog<D>::whole_step_velocity(std::vector<V>& out) const {
-  const std::size_t n = s_.size();
-  out.resize(n);
+  out.resize(s_.size());
+  whole_step_velocity(0, s_.size(), out.data()->data());
+}
+
+template <int D>
+void Leapfrog<D>::whole_step_velocity(std::size_t first, std::size_t count, double* out) const {
   const double h = s_.step == 0 ? 0.0 : 0.5 * s_.dt;
-  for (std::size_t i = 0; i < n; ++i) out[i] = s_.v[i] + (h * s_.inv_mass[i]) * s_.f[i];
+  for (std::size_t i = first; i < first + count; ++i)
+    Eigen::Map<V>(out + (i - first) * D) = s_.v[i] + (h * s_.masses.inv_mass(i)) * s_.f[i];
 }
 
 template <int D>
@@ -429,8 +431,8 @@ Observables Leapfrog<D>::observe() const {
   const double h = s_.step == 0 ? 0.0 : 0.5 * s_.dt;
   double ke = 0.0;
   for (std::size_t i = 0; i < s_.size(); ++i) {
-    const V v = s_.v[i] + (h * s_.inv_mass[i]) * s_.f[i];
-    ke += 0.5 * s_.mass[i] * v.squaredNorm();
+    const V v = s_.v[i] + (h * s_.masses.inv_mass(i)) * s_.f[i];
+    ke += 0.5 * s_.masses.mass(i) * v.squaredNorm();
   }
   o.kinetic = ke;
   for (auto* e : observe_) e->observe(s_, o);

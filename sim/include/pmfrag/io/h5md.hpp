@@ -7,6 +7,7 @@
 
 #include "pmfrag/step/effects.hpp"
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -40,6 +41,10 @@ class H5mdWriter {
   /// The same from N x dim arrays in place (the integrator's own, no copy); `velocity` is not read when the
   /// frames leave velocities out (writes_velocity()).
   void write_frame(long step, double time, const double* position, const double* velocity, const Observables& obs);
+  /// Rows [first, first + count) of an N x dim frame, written into out (count x dim).
+  using FrameRows = std::function<void(std::size_t first, std::size_t count, double* out)>;
+  /// The same with the velocities made a chunk at a time (no N x dim array of them).
+  void write_frame(long step, double time, const double* position, const FrameRows& velocity, const Observables& obs);
   bool writes_velocity() const;
   /// Appends rows to the bond record (/connectivity/broken_bonds), in step order; on disk at the next flush.
   void append_bond_events(const std::vector<BondEvent>& events);
@@ -53,7 +58,7 @@ class H5mdWriter {
 
  private:
   void create(const System& sys, const Scene& scene, const RunParameters& run);
-  void append_frame(long step, double time, const double* position, const double* velocity, const Observables& obs);
+  void append_frame(long step, double time, const double* position, const FrameRows& velocity, const Observables& obs);
   struct Impl;
   std::unique_ptr<Impl> impl_;
   long frames_ = 0, events_ = 0;

@@ -9,8 +9,10 @@
 
 #include <Eigen/Core>
 
+#include <cstdint>
 #include <limits>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -19,6 +21,35 @@ namespace pmfrag {
 namespace detail {
 class Team;
 }
+
+/// The particles' masses as a few kinds, a byte a particle instead of two doubles (16 B at millions of
+/// particles): a kind per phase, and one per phase for particles whose motion is prescribed (inverse mass 0).
+class ParticleMasses {
+ public:
+  ParticleMasses() = default;
+  /// particle i has the mass of phase phase_of[i] [g]
+  ParticleMasses(const std::vector<double>& phase_mass, const std::vector<int>& phase_of) {
+    if (phase_mass.size() > 128) throw std::invalid_argument("more than 128 phases");
+    for (const double m : phase_mass) mass_.push_back(m), inv_.push_back(1.0 / m);
+    kind_.reserve(phase_of.size());
+    for (const int p : phase_of) kind_.push_back(static_cast<std::uint8_t>(p));
+  }
+  double mass(std::size_t i) const { return mass_[kind_[i]]; }        ///< g
+  double inv_mass(std::size_t i) const { return inv_[kind_[i]]; }     ///< 1/g; 0 if prescribed
+  /// Particle i's motion is prescribed (a kinematic boundary): its inverse mass becomes 0, its mass stays.
+  void prescribe(std::size_t i) {
+    const double m = mass(i);
+    std::size_t k = 0;
+    while (k < mass_.size() && !(inv_[k] == 0.0 && mass_[k] == m)) ++k;
+    if (k == mass_.size()) mass_.push_back(m), inv_.push_back(0.0);
+    kind_[i] = static_cast<std::uint8_t>(k);
+  }
+  std::size_t size() const { return kind_.size(); }
+
+ private:
+  std::vector<std::uint8_t> kind_;
+  std::vector<double> mass_, inv_;  ///< per kind
+};
 
 template <int D>
 struct State {
@@ -29,8 +60,7 @@ struct State {
   AlignedVector<V> x;  ///< positions r_k [cm]
   AlignedVector<V> v;  ///< velocities: v_0 before the first step, then the half-step v_{k-1/2} [cm/s]
   AlignedVector<V> f;  ///< forces at r_k [dyne]
-  std::vector<double> mass;      ///< g
-  std::vector<double> inv_mass;  ///< 1/g; 0 for particles whose motion is prescribed (kinematic)
+  ParticleMasses masses;  ///< g; inverse 0 for particles whose motion is prescribed (kinematic)
   long step = 0;
   double dt = 0.0;  ///< s: the step that led to r_k (fixed steps: every step)
   double t = 0.0;   ///< s: the time of r_k

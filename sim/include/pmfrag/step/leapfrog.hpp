@@ -60,6 +60,8 @@ class Leapfrog {
 
   /// Whole-step velocities v_k = v_{k-1/2} + (dt/2) a_k (v_0 at k = 0), as written to frames.
   void whole_step_velocity(std::vector<V>& out) const;
+  /// The same for particles [first, first + count), into out (count x D).
+  void whole_step_velocity(std::size_t first, std::size_t count, double* out) const;
   /// Energies and tallies at the current step (serial sums: the same for any thread count).
   Observables observe() const;
 
