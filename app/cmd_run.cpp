@@ -49,7 +49,8 @@ void run(const RunCli& o) {
   ro.allow_unstable = o.allow_unstable;
   ro.force = o.force;
   ro.threads = thread_options_from_environment(o.threads);
-  if (!o.quiet) ro.log = [](const std::string& line) { std::fprintf(stderr, "pmfrag: %s\n", line.c_str()); };
+  ro.warn = [](const std::string& line) { std::fprintf(stderr, "pmfrag: %s\n", line.c_str()); };
+  if (!o.quiet) ro.log = ro.warn;
   const bool tty = isatty(fileno(stderr));
   double last_plain = -1e9;
   if (!o.quiet)

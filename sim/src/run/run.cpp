@@ -472,7 +472,7 @@ RunResult resume_run(const RunOptions& opt) {
   } catch (const TrajectoryShortOfCheckpoint& e) {
     // The frames the checkpoint counts are not all on disk whole: a run from step 0 writes them again, bitwise
     // the same (runs are deterministic on any thread count), rather than a trajectory with a hole.
-    std::fprintf(stderr, "pmfrag: %s: starting the run over\n", e.what());
+    if (o.warn) o.warn(std::string(e.what()) + ": starting the run over");
     o.force = true;
     return start_run(scene, o, false, started);
   }

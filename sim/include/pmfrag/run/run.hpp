@@ -24,6 +24,7 @@ struct RunOptions {
   bool force = false;           ///< overwrite an existing trajectory
   ThreadOptions threads;        ///< how the steps use threads (threads.hpp)
   std::function<void(const std::string&)> log;         ///< one line of information
+  std::function<void(const std::string&)> warn;        ///< one line the user must see, even when quiet
   std::function<void(const Progress&)> progress;       ///< called every ~0.2 s of wall time
 };
 
